@@ -1,0 +1,8 @@
+//! chainlight's reference renderer: glTF scenes, an obvhs BVH, materials, cameras, lights,
+//! independent samplers and path tracing, a deterministic film, and EXR/PNG output.
+//!
+//! Every integrator draws its random numbers through [`sampler::Sampler`], so the same path
+//! construction code runs under an independent sampler (PT, BDPT) and under primary-sample-space
+//! Markov chains (PSSMLT, MMLT, DRMLT, MALA).
+
+pub mod image;
