@@ -6,3 +6,4 @@
 //! Markov chains (PSSMLT, MMLT, DRMLT, MALA).
 
 pub mod image;
+pub mod session;
