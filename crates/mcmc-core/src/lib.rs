@@ -1,1 +1,54 @@
-//! mcmc-core
+//! State-space-agnostic Markov chain Monte Carlo for light transport.
+//!
+//! The crate separates *what is sampled* ([`Target`]), *how to move* ([`Proposal`]), *how to
+//! decide* ([`Kernel`]: [`Mh`], later delayed rejection) and *how to learn*
+//! ([`Controller`]: global or regional scale adaptation, automatic large-step control). A
+//! [`Chain`] drives one kernel with its own RNG and reports every evaluated candidate, with
+//! its expected-value weight, to an [`Observer`].
+//!
+//! # Example
+//! ```
+//! use mcmc_core::{Chain, GaussianRandomWalk, Mh, NoAdaptation, Target};
+//! use rand::SeedableRng;
+//!
+//! /// A standard normal in one dimension.
+//! struct Normal;
+//! impl Target for Normal {
+//!     type State = Vec<f64>;
+//!     type Payload = ();
+//!     fn evaluate(&self, x: &mut Vec<f64>, _: &mut ()) -> f64 {
+//!         -0.5 * x[0] * x[0]
+//!     }
+//! }
+//!
+//! let kernel = Mh::new(GaussianRandomWalk::new(1.0).unwrap());
+//! let rng = rand_pcg::Pcg64::seed_from_u64(7);
+//! let mut chain = Chain::new(&Normal, kernel, NoAdaptation, rng, vec![0.0]).unwrap();
+//! chain.run(1000, &mut ()).unwrap();
+//! assert!(chain.stats().acceptance_rate() > 0.3);
+//! ```
+
+mod chain;
+pub mod controller;
+mod error;
+mod kernel;
+mod mh;
+pub mod partition;
+pub mod proposal;
+pub mod seed;
+pub mod stats;
+mod target;
+
+pub use chain::Chain;
+pub use controller::{Controller, NoAdaptation};
+pub use error::McmcError;
+pub use kernel::{
+    accept_prob_from_log_ratio, mh_accept_prob, Kernel, Observer, StepInfo, MAX_STAGES,
+};
+pub use mh::Mh;
+pub use partition::Partition;
+pub use proposal::{GaussianRandomWalk, Mixture, Proposal, Proposed};
+pub use target::{
+    finite_difference_gradient, DifferentiableTarget, FiniteDifference, Point, Sample, SampleOf,
+    Target,
+};

@@ -1,0 +1,135 @@
+//! How to decide: the transition kernel trait, step reports and observers.
+
+use rand::Rng;
+
+use crate::target::{Sample, SampleOf, Target};
+
+/// Maximum number of stages of a kernel (MH has 1, delayed rejection 2).
+pub const MAX_STAGES: usize = 2;
+
+/// What one kernel step did. Small and `Copy`: controllers and statistics read it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepInfo {
+    /// Mixture component chosen at the first stage (0 for a plain proposal).
+    pub component: usize,
+    /// Number of stages that proposed a candidate (1 or 2).
+    pub stages_tried: u8,
+    /// Acceptance probability of each tried stage (0 for invalid candidates and untried
+    /// stages).
+    pub accept_prob: [f64; MAX_STAGES],
+    /// Log density of each stage's candidate (`NEG_INFINITY` if invalid or untried).
+    pub candidate_log_density: [f64; MAX_STAGES],
+    /// The stage (1-based) whose candidate was accepted, or 0 if the chain stayed.
+    pub accepted_stage: u8,
+    /// True if a candidate had a NaN/+inf log density or a NaN Hastings term: it was
+    /// rejected, and the chain reports the error.
+    pub non_finite: bool,
+}
+
+impl StepInfo {
+    /// A report for a step that has not proposed anything yet.
+    #[must_use]
+    pub const fn new(component: usize) -> Self {
+        Self {
+            component,
+            stages_tried: 0,
+            accept_prob: [0.0; MAX_STAGES],
+            candidate_log_density: [f64::NEG_INFINITY; MAX_STAGES],
+            accepted_stage: 0,
+            non_finite: false,
+        }
+    }
+
+    /// True if the chain moved.
+    #[must_use]
+    pub const fn accepted(&self) -> bool {
+        self.accepted_stage != 0
+    }
+}
+
+/// Receives every sample a step evaluated, with its expected-value weight, and the step report.
+///
+/// Expected-value splatting (Veach's thesis, section 11.3.3): for MH the current state gets
+/// weight `1 - a` and the candidate `a`; for delayed rejection x, y and z get the weights of the
+/// DR paper's Fig. 8. The weights of one step sum to 1. The kernel does not know whether the
+/// observer splats to a film, collects statistics or does nothing (`()`).
+pub trait Observer<S, P> {
+    /// `sample` contributes with `weight` (in `[0, 1]`) to this step's estimate.
+    fn splat(&mut self, sample: &Sample<S, P>, weight: f64) {
+        let _ = (sample, weight);
+    }
+    /// Called once at the end of each step.
+    fn step(&mut self, info: &StepInfo) {
+        let _ = info;
+    }
+}
+
+impl<S, P> Observer<S, P> for () {}
+
+/// One Markov transition that leaves the target invariant.
+///
+/// The chain owns the current sample (state + cached evaluation) and scratch samples for the
+/// candidates; the kernel proposes into the scratch buffers, evaluates them, decides, reports
+/// to the observer, and swaps the accepted candidate into `current`.
+pub trait Kernel<T: Target> {
+    /// Number of stages (candidates per step at most); the chain provides this many scratch
+    /// samples.
+    fn stages(&self) -> usize {
+        1
+    }
+
+    /// Performs one transition.
+    fn step<R, O>(
+        &mut self,
+        target: &T,
+        current: &mut SampleOf<T>,
+        scratch: &mut [SampleOf<T>],
+        rng: &mut R,
+        observer: &mut O,
+    ) -> StepInfo
+    where
+        R: Rng + ?Sized,
+        O: Observer<T::State, T::Payload> + ?Sized;
+
+    /// Log of the probability flow density along a transition path, for testing detailed
+    /// balance: for `path = [x, y]`, `log pi(x) + log K(x -> y)` restricted to moves that go
+    /// straight to `y` (first stage); for a delayed-rejection kernel and `path = [x, y, z]`,
+    /// the flow of proposing `y`, rejecting it, and moving to `z`. The samples are evaluated.
+    fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64;
+
+    /// The path whose flow must equal that of `path` under detailed balance. For MH and
+    /// Tierney-Mira DR it is `path` reversed; Green-Mira DR passes through a fictional state.
+    fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
+        let _ = target;
+        path.iter().rev().cloned().collect()
+    }
+}
+
+/// `min(1, exp(log_ratio))` with NaN mapped to 0.
+#[inline]
+#[must_use]
+pub fn accept_prob_from_log_ratio(log_ratio: f64) -> f64 {
+    if log_ratio >= 0.0 {
+        1.0
+    } else if log_ratio.is_nan() {
+        0.0
+    } else {
+        log_ratio.exp()
+    }
+}
+
+/// MH acceptance probability `min(1, pi(y) q(y->x) / (pi(x) q(x->y)))` from log densities
+/// and the log Hastings term. A candidate of zero density is never accepted, whatever the
+/// other terms are (this also covers `-inf - -inf`).
+#[inline]
+#[must_use]
+pub fn mh_accept_prob(log_pi_x: f64, log_pi_y: f64, log_hastings: f64) -> f64 {
+    if log_pi_y == f64::NEG_INFINITY || log_hastings == f64::NEG_INFINITY {
+        return 0.0;
+    }
+    if log_pi_x == f64::NEG_INFINITY {
+        // Leaving a zero-density state (only possible from a bad start): always move.
+        return 1.0;
+    }
+    accept_prob_from_log_ratio(log_pi_y - log_pi_x + log_hastings)
+}
