@@ -38,6 +38,9 @@ pub mod proposal;
 pub mod seed;
 pub mod stats;
 mod target;
+#[cfg(feature = "testing")]
+pub mod testing;
+pub mod toy;
 
 pub use chain::Chain;
 pub use controller::{Controller, NoAdaptation};

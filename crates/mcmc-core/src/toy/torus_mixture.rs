@@ -1,0 +1,197 @@
+//! A mixture of wrapped Gaussians on the unit torus `[0,1)^2`, with mass across the seams.
+
+use rand::Rng;
+
+use super::gaussian_mixture::{normalise_components, pick_component, DiagonalGaussian};
+use super::special::normal_interval;
+use super::{impl_toy_target, standard_normal, uniform_edges, Bins, ToyTarget};
+use crate::proposal::log_sum_exp;
+use crate::McmcError;
+
+/// Number of periodic images summed on each side (`m = -3..=3`). With `sd <= 0.25` the
+/// nearest omitted image is at least 2.5 / 0.25 = 10 standard deviations away, so the
+/// truncation error is below `Phi(-10) = 7.6e-24`.
+const IMAGES: i32 = 3;
+
+/// Largest standard deviation accepted (see [`IMAGES`]).
+const MAX_SD: f64 = 0.25;
+
+/// `x mod 1` in `[0, 1)` (a tiny negative `x` would round to 1.0; it is mapped to 0).
+#[inline]
+#[must_use]
+pub(crate) fn wrap(x: f64) -> f64 {
+    let w = x - x.floor();
+    if w >= 1.0 {
+        0.0
+    } else {
+        w
+    }
+}
+
+/// A mixture of *wrapped* axis-aligned Gaussians on the unit torus:
+/// `pi(x) = sum_k w_k prod_d sum_{m in Z} N(x_d + m; mu_kd, s_kd^2)` for `x in [0, 1)^2`.
+///
+/// The density is evaluated at `x mod 1`, so it is periodic on `R^2`: any random walk on
+/// `R^2` is, seen modulo 1, a walk on the torus, and primary-sample-space mutations that wrap
+/// around see the same target. Tests bin the wrapped coordinates. Components centred near
+/// 0 or 1 put mass across the seams, where a proposal that forgets to wrap (or wraps without
+/// the matching density) goes wrong.
+///
+/// Bins: a 12 x 12 grid on `[0, 1)^2` in wrapped coordinates; a cell's probability sums the
+/// normal CDF differences of the 7 nearest periodic images per axis (exact to `1e-23`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TorusMixture {
+    components: Vec<DiagonalGaussian>,
+}
+
+impl TorusMixture {
+    /// A mixture of wrapped components: means in `[0, 1)`, standard deviations in
+    /// `(0, 0.25]`, weights normalised, 1 to 16 components.
+    pub fn new(mut components: Vec<DiagonalGaussian>) -> Result<Self, McmcError> {
+        normalise_components(&mut components)?;
+        for c in &components {
+            for d in 0..2 {
+                McmcError::check_range("mean", c.mean[d], 0.0, 1.0 - f64::EPSILON, "[0, 1)")?;
+                McmcError::check_range("sd", c.sd[d], f64::MIN_POSITIVE, MAX_SD, "(0, 0.25]")?;
+            }
+        }
+        Ok(Self { components })
+    }
+
+    /// Two modes that straddle the seams: weight 0.6 at `(0.95, 0.5)` with
+    /// `sd = (0.07, 0.1)` (crosses `x0 = 1 ~ 0`), weight 0.4 at `(0.3, 0.02)` with
+    /// `sd = (0.1, 0.05)` (crosses `x1 = 0 ~ 1`).
+    #[must_use]
+    pub fn across_seam() -> Self {
+        Self::new(vec![
+            DiagonalGaussian {
+                weight: 0.6,
+                mean: [0.95, 0.5],
+                sd: [0.07, 0.1],
+            },
+            DiagonalGaussian {
+                weight: 0.4,
+                mean: [0.3, 0.02],
+                sd: [0.1, 0.05],
+            },
+        ])
+        .expect("valid constants")
+    }
+
+    /// The components (normalised weights).
+    #[must_use]
+    pub fn components(&self) -> &[DiagonalGaussian] {
+        &self.components
+    }
+
+    /// The wrapped 1-D normal density of one axis at `t in [0, 1)`.
+    fn wrapped_pdf(t: f64, mean: f64, sd: f64) -> f64 {
+        let norm = 1.0 / (sd * (2.0 * std::f64::consts::PI).sqrt());
+        (-IMAGES..=IMAGES)
+            .map(|m| {
+                let z = (t + f64::from(m) - mean) / sd;
+                norm * (-0.5 * z * z).exp()
+            })
+            .sum()
+    }
+
+    /// Probability that the wrapped normal of one axis falls in `[lo, hi) subset [0, 1)`.
+    fn wrapped_interval(lo: f64, hi: f64, mean: f64, sd: f64) -> f64 {
+        (-IMAGES..=IMAGES)
+            .map(|m| {
+                let m = f64::from(m);
+                normal_interval((lo + m - mean) / sd, (hi + m - mean) / sd)
+            })
+            .sum()
+    }
+}
+
+impl ToyTarget for TorusMixture {
+    fn name(&self) -> &'static str {
+        "torus mixture (2-D)"
+    }
+
+    fn dim(&self) -> usize {
+        2
+    }
+
+    fn log_density(&self, x: &[f64]) -> f64 {
+        let (t0, t1) = (wrap(x[0]), wrap(x[1]));
+        let mut terms = [f64::NEG_INFINITY; super::MAX_MIXTURE_COMPONENTS];
+        for (t, c) in terms.iter_mut().zip(&self.components) {
+            // Each wrapped factor is a sum of positive terms; take logs per axis.
+            *t = c.weight.ln()
+                + Self::wrapped_pdf(t0, c.mean[0], c.sd[0]).ln()
+                + Self::wrapped_pdf(t1, c.mean[1], c.sd[1]).ln();
+        }
+        log_sum_exp(&terms[..self.components.len()])
+    }
+
+    fn sample_exact<R: Rng + ?Sized>(&self, rng: &mut R) -> Vec<f64> {
+        let c = &self.components[pick_component(&self.components, rng)];
+        let z0 = standard_normal(rng);
+        let z1 = standard_normal(rng);
+        vec![
+            wrap(c.mean[0] + c.sd[0] * z0),
+            wrap(c.mean[1] + c.sd[1] * z1),
+        ]
+    }
+
+    fn bins(&self) -> Bins {
+        let components = self.components.clone();
+        Bins::grid_2d(
+            uniform_edges(0.0, 1.0, 12),
+            uniform_edges(0.0, 1.0, 12),
+            move |lo, hi| {
+                components
+                    .iter()
+                    .map(|c| {
+                        c.weight
+                            * Self::wrapped_interval(lo[0], hi[0], c.mean[0], c.sd[0])
+                            * Self::wrapped_interval(lo[1], hi[1], c.mean[1], c.sd[1])
+                    })
+                    .sum()
+            },
+            |x| [wrap(x[0]), wrap(x[1])],
+        )
+    }
+
+    /// The unit square (the whole torus).
+    fn bounding_box(&self) -> (Vec<f64>, Vec<f64>) {
+        (vec![0.0, 0.0], vec![1.0, 1.0])
+    }
+}
+
+impl_toy_target!(TorusMixture);
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_util::*;
+    use super::*;
+
+    #[test]
+    fn normalised_and_sampled_exactly() {
+        let t = TorusMixture::across_seam();
+        check_normalised(&t, 400, 1e-9);
+        check_sampler_matches_bins(&t, 14);
+        // Overflow bin is empty: the grid covers the torus.
+        assert!(*t.bins().probabilities().last().unwrap() < 1e-12);
+        assert!(TorusMixture::new(vec![DiagonalGaussian {
+            weight: 1.0,
+            mean: [0.5, 0.5],
+            sd: [0.3, 0.1]
+        }])
+        .is_err());
+    }
+
+    #[test]
+    fn periodic_and_mass_across_the_seam() {
+        let t = TorusMixture::across_seam();
+        let a = t.log_density(&[0.01, 0.5]);
+        assert!((a - t.log_density(&[1.01, 0.5])).abs() < 1e-12);
+        assert!((a - t.log_density(&[-0.99, -2.5])).abs() < 1e-12);
+        // The first mode's density just past the seam exceeds that at the far side.
+        assert!(a > t.log_density(&[0.8, 0.5]));
+        assert_eq!(wrap(-1e-18), 0.0);
+    }
+}
