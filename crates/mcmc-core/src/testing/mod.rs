@@ -1,0 +1,1 @@
+//! The correctness harness (placeholder while being written).
