@@ -6,4 +6,5 @@
 //! Markov chains (PSSMLT, MMLT, DRMLT, MALA).
 
 pub mod image;
+pub mod mlt;
 pub mod session;
