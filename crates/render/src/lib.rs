@@ -6,5 +6,7 @@
 //! Markov chains (PSSMLT, MMLT, DRMLT, MALA).
 
 pub mod image;
+pub mod image_io;
+pub mod metrics;
 pub mod mlt;
 pub mod session;
