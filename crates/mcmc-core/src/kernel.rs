@@ -133,3 +133,29 @@ pub fn mh_accept_prob(log_pi_x: f64, log_pi_y: f64, log_hastings: f64) -> f64 {
     }
     accept_prob_from_log_ratio(log_pi_y - log_pi_x + log_hastings)
 }
+
+/// `ln` of [`mh_accept_prob`], computed in log space: `min(0, log_pi_y - log_pi_x +
+/// log_hastings)`, `NEG_INFINITY` for a zero-density candidate or an impossible reverse move,
+/// 0 when leaving a zero-density state, `NEG_INFINITY` for NaN ratios.
+///
+/// Use it for flows (`log_flow`): `mh_accept_prob(..).ln()` underflows to `-inf` (or loses
+/// precision in the subnormal range) once the log ratio is below about -708, which happens
+/// for legitimate pairs far out in a target's tails.
+#[inline]
+#[must_use]
+pub fn mh_log_accept_prob(log_pi_x: f64, log_pi_y: f64, log_hastings: f64) -> f64 {
+    if log_pi_y == f64::NEG_INFINITY || log_hastings == f64::NEG_INFINITY {
+        return f64::NEG_INFINITY;
+    }
+    if log_pi_x == f64::NEG_INFINITY {
+        return 0.0;
+    }
+    let log_ratio = log_pi_y - log_pi_x + log_hastings;
+    if log_ratio >= 0.0 {
+        0.0
+    } else if log_ratio.is_nan() {
+        f64::NEG_INFINITY
+    } else {
+        log_ratio
+    }
+}

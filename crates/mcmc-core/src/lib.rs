@@ -46,7 +46,8 @@ pub use chain::Chain;
 pub use controller::{Controller, NoAdaptation};
 pub use error::McmcError;
 pub use kernel::{
-    accept_prob_from_log_ratio, mh_accept_prob, Kernel, Observer, StepInfo, MAX_STAGES,
+    accept_prob_from_log_ratio, mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo,
+    MAX_STAGES,
 };
 pub use mh::Mh;
 pub use partition::Partition;

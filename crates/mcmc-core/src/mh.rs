@@ -3,7 +3,7 @@
 use rand::{Rng, RngExt};
 
 use crate::controller::{LargeStepTunable, RegionalTunable, ScaleTunable};
-use crate::kernel::{mh_accept_prob, Kernel, Observer, StepInfo};
+use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
 use crate::target::{SampleOf, Target};
 
@@ -84,8 +84,7 @@ impl<T: Target, P: Proposal<T::State>> Kernel<T> for Mh<P> {
             .map(|j| {
                 let log_q = self.proposal.log_q_component(j, &x.state, &y.state);
                 let h = self.proposal.log_hastings(j, &x.state, &y.state);
-                let a = mh_accept_prob(x.log_density, y.log_density, h);
-                x.log_density + log_q + a.ln()
+                x.log_density + log_q + mh_log_accept_prob(x.log_density, y.log_density, h)
             })
             .collect();
         log_sum_exp(&terms)

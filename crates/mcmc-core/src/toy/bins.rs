@@ -13,8 +13,11 @@ use std::sync::Arc;
 #[derive(Clone)]
 pub struct Bins {
     probabilities: Vec<f64>,
-    assign: Arc<dyn Fn(&[f64]) -> usize + Send + Sync>,
+    assign: Arc<AssignFn>,
 }
+
+/// The bin assignment function of [`Bins`].
+type AssignFn = dyn Fn(&[f64]) -> usize + Send + Sync;
 
 impl std::fmt::Debug for Bins {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

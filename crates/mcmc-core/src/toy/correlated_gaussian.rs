@@ -120,10 +120,8 @@ impl CorrelatedGaussian {
         let n = self.mean.len();
         let mut z = vec![0.0; n];
         for i in 0..n {
-            let mut s = x[i] - self.mean[i];
-            for k in 0..i {
-                s -= self.chol[i * n + k] * z[k];
-            }
+            let row = &self.chol[i * n..i * n + i];
+            let s = x[i] - self.mean[i] - row.iter().zip(&z[..i]).map(|(l, v)| l * v).sum::<f64>();
             z[i] = s / self.chol[i * n + i];
         }
         z
@@ -232,10 +230,10 @@ impl DifferentiableTarget for CorrelatedGaussian {
         grad.clear();
         grad.resize(n, 0.0);
         for i in (0..n).rev() {
-            let mut s = z[i];
-            for k in i + 1..n {
-                s -= self.chol[k * n + i] * grad[k];
-            }
+            let s = z[i]
+                - (i + 1..n)
+                    .map(|k| self.chol[k * n + i] * grad[k])
+                    .sum::<f64>();
             grad[i] = s / self.chol[i * n + i];
         }
         for g in grad.iter_mut() {

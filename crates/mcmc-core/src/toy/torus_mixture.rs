@@ -19,7 +19,7 @@ const MAX_SD: f64 = 0.25;
 /// `x mod 1` in `[0, 1)` (a tiny negative `x` would round to 1.0; it is mapped to 0).
 #[inline]
 #[must_use]
-pub(crate) fn wrap(x: f64) -> f64 {
+pub fn wrap(x: f64) -> f64 {
     let w = x - x.floor();
     if w >= 1.0 {
         0.0
@@ -28,17 +28,34 @@ pub(crate) fn wrap(x: f64) -> f64 {
     }
 }
 
+/// The density of the wrapped normal `sum_{m in Z} N(t + m; mean, sd^2)` at `t`, summing the
+/// images `m = -3..=3`: exact to `1e-23` relative for `sd <= 0.25` and `|t - mean| <= 1`
+/// (e.g. `t` and `mean` in `[0, 1)`, or a difference of two torus points with `mean = 0`).
+#[must_use]
+pub fn wrapped_normal_pdf(t: f64, mean: f64, sd: f64) -> f64 {
+    let norm = 1.0 / (sd * (2.0 * std::f64::consts::PI).sqrt());
+    (-IMAGES..=IMAGES)
+        .map(|m| {
+            let z = (t + f64::from(m) - mean) / sd;
+            norm * (-0.5 * z * z).exp()
+        })
+        .sum()
+}
+
 /// A mixture of *wrapped* axis-aligned Gaussians on the unit torus:
-/// `pi(x) = sum_k w_k prod_d sum_{m in Z} N(x_d + m; mu_kd, s_kd^2)` for `x in [0, 1)^2`.
+/// `pi(x) = sum_k w_k prod_d sum_{m in Z} N(x_d + m; mu_kd, s_kd^2)` for `x in [0, 1)^2`,
+/// and 0 outside the unit square.
 ///
-/// The density is evaluated at `x mod 1`, so it is periodic on `R^2`: any random walk on
-/// `R^2` is, seen modulo 1, a walk on the torus, and primary-sample-space mutations that wrap
-/// around see the same target. Tests bin the wrapped coordinates. Components centred near
-/// 0 or 1 put mass across the seams, where a proposal that forgets to wrap (or wraps without
-/// the matching density) goes wrong.
+/// States are points of `[0, 1)^2`, as in primary sample space. A proposal that wraps around
+/// (PSS mutations) sees each mode whole across the seam; a walk that does not wrap is still a
+/// correct kernel (candidates outside the square have zero density and are rejected), it
+/// just sees the modes cut in two. Components centred near 0 or 1 put mass across the seams,
+/// where a proposal that wraps without the matching density (or that does not return to the
+/// square) goes wrong.
 ///
-/// Bins: a 12 x 12 grid on `[0, 1)^2` in wrapped coordinates; a cell's probability sums the
-/// normal CDF differences of the 7 nearest periodic images per axis (exact to `1e-23`).
+/// Bins: a 12 x 12 grid on `[0, 1)^2` plus an overflow bin of probability 0 (a state outside
+/// the square fails the test outright); a cell's probability sums the normal CDF differences
+/// of the 7 nearest periodic images per axis (exact to `1e-23`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TorusMixture {
     components: Vec<DiagonalGaussian>,
@@ -84,17 +101,6 @@ impl TorusMixture {
         &self.components
     }
 
-    /// The wrapped 1-D normal density of one axis at `t in [0, 1)`.
-    fn wrapped_pdf(t: f64, mean: f64, sd: f64) -> f64 {
-        let norm = 1.0 / (sd * (2.0 * std::f64::consts::PI).sqrt());
-        (-IMAGES..=IMAGES)
-            .map(|m| {
-                let z = (t + f64::from(m) - mean) / sd;
-                norm * (-0.5 * z * z).exp()
-            })
-            .sum()
-    }
-
     /// Probability that the wrapped normal of one axis falls in `[lo, hi) subset [0, 1)`.
     fn wrapped_interval(lo: f64, hi: f64, mean: f64, sd: f64) -> f64 {
         (-IMAGES..=IMAGES)
@@ -116,13 +122,16 @@ impl ToyTarget for TorusMixture {
     }
 
     fn log_density(&self, x: &[f64]) -> f64 {
-        let (t0, t1) = (wrap(x[0]), wrap(x[1]));
+        let (t0, t1) = (x[0], x[1]);
+        if !((0.0..1.0).contains(&t0) && (0.0..1.0).contains(&t1)) {
+            return f64::NEG_INFINITY;
+        }
         let mut terms = [f64::NEG_INFINITY; super::MAX_MIXTURE_COMPONENTS];
         for (t, c) in terms.iter_mut().zip(&self.components) {
             // Each wrapped factor is a sum of positive terms; take logs per axis.
             *t = c.weight.ln()
-                + Self::wrapped_pdf(t0, c.mean[0], c.sd[0]).ln()
-                + Self::wrapped_pdf(t1, c.mean[1], c.sd[1]).ln();
+                + wrapped_normal_pdf(t0, c.mean[0], c.sd[0]).ln()
+                + wrapped_normal_pdf(t1, c.mean[1], c.sd[1]).ln();
         }
         log_sum_exp(&terms[..self.components.len()])
     }
@@ -152,7 +161,7 @@ impl ToyTarget for TorusMixture {
                     })
                     .sum()
             },
-            |x| [wrap(x[0]), wrap(x[1])],
+            |x| [x[0], x[1]],
         )
     }
 
@@ -174,7 +183,7 @@ mod tests {
         let t = TorusMixture::across_seam();
         check_normalised(&t, 400, 1e-9);
         check_sampler_matches_bins(&t, 14);
-        // Overflow bin is empty: the grid covers the torus.
+        // The overflow bin (outside the square) has probability 0.
         assert!(*t.bins().probabilities().last().unwrap() < 1e-12);
         assert!(TorusMixture::new(vec![DiagonalGaussian {
             weight: 1.0,
@@ -185,13 +194,14 @@ mod tests {
     }
 
     #[test]
-    fn periodic_and_mass_across_the_seam() {
+    fn mass_across_the_seam_and_zero_outside() {
         let t = TorusMixture::across_seam();
-        let a = t.log_density(&[0.01, 0.5]);
-        assert!((a - t.log_density(&[1.01, 0.5])).abs() < 1e-12);
-        assert!((a - t.log_density(&[-0.99, -2.5])).abs() < 1e-12);
-        // The first mode's density just past the seam exceeds that at the far side.
-        assert!(a > t.log_density(&[0.8, 0.5]));
+        // The first mode (mean 0.95) has more density just past the seam (distance 0.06)
+        // than at 0.8 (distance 0.15).
+        assert!(t.log_density(&[0.01, 0.5]) > t.log_density(&[0.8, 0.5]));
+        assert_eq!(t.log_density(&[1.01, 0.5]), f64::NEG_INFINITY);
+        assert_eq!(t.log_density(&[0.5, -0.01]), f64::NEG_INFINITY);
         assert_eq!(wrap(-1e-18), 0.0);
+        assert_eq!(wrap(1.25), 0.25);
     }
 }

@@ -1,0 +1,199 @@
+//! Negative controls: deliberately broken proposals and kernels that the harness must reject.
+//!
+//! A correctness test that cannot fail proves nothing. Each control here reproduces a bug
+//! seen in real MLT code (DESIGN.md, "Negative controls"); tests show the harness catches it
+//! on the same target and proposal where the correct kernel passes. Other crates reuse them to
+//! show their own tests have teeth.
+
+use rand::{Rng, RngExt};
+
+use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
+use crate::proposal::{log_sum_exp, Proposal, Proposed};
+use crate::target::{SampleOf, Target};
+
+/// Wraps an asymmetric proposal and *claims* it is symmetric: `propose` reports a Hastings
+/// term of 0 and `is_symmetric` returns true, while `log_q` stays the true density.
+///
+/// The bug: a proposal whose scale or drift depends on the state (a regional scale, a
+/// gradient step) fed to a "symmetric fast path". MH with it violates detailed balance, and
+/// [`super::assert_symmetric_proposal`] / [`super::assert_hastings_consistent`] expose the
+/// lie directly.
+#[derive(Clone, Debug)]
+pub struct TreatedAsSymmetric<P>(pub P);
+
+impl<S, P: Proposal<S>> Proposal<S> for TreatedAsSymmetric<P> {
+    fn propose<R: Rng + ?Sized>(&self, x: &S, y: &mut S, rng: &mut R) -> Proposed {
+        match self.0.propose(x, y, rng) {
+            Proposed::Move { component, .. } => Proposed::Move {
+                log_hastings: 0.0,
+                component,
+            },
+            invalid => invalid,
+        }
+    }
+
+    fn log_q(&self, from: &S, to: &S) -> f64 {
+        self.0.log_q(from, to)
+    }
+
+    fn is_symmetric(&self) -> bool {
+        true
+    }
+
+    fn num_components(&self) -> usize {
+        self.0.num_components()
+    }
+
+    fn log_q_component(&self, j: usize, from: &S, to: &S) -> f64 {
+        self.0.log_q_component(j, from, to)
+    }
+
+    fn log_hastings(&self, _j: usize, _x: &S, _y: &S) -> f64 {
+        0.0
+    }
+}
+
+/// Metropolis-Hastings that forgets the Hastings term: it accepts with
+/// `min(1, pi(y) / pi(x))` whatever the proposal reports, while its `log_flow` honestly uses
+/// the true `q` (what the kernel really does).
+///
+/// The bug: plain Metropolis acceptance with an asymmetric proposal.
+#[derive(Clone, Debug)]
+pub struct MhWithoutHastings<P> {
+    /// The (honest) proposal.
+    pub proposal: P,
+}
+
+impl<T: Target, P: Proposal<T::State>> Kernel<T> for MhWithoutHastings<P> {
+    fn step<R, O>(
+        &mut self,
+        target: &T,
+        current: &mut SampleOf<T>,
+        scratch: &mut [SampleOf<T>],
+        rng: &mut R,
+        observer: &mut O,
+    ) -> StepInfo
+    where
+        R: Rng + ?Sized,
+        O: Observer<T::State, T::Payload> + ?Sized,
+    {
+        let y = &mut scratch[0];
+        let proposed = self.proposal.propose(&current.state, &mut y.state, rng);
+        let mut info = StepInfo::new(proposed.component());
+        info.stages_tried = 1;
+        let a = match proposed {
+            Proposed::Invalid { .. } => 0.0,
+            Proposed::Move { .. } => {
+                y.log_density = target.evaluate(&mut y.state, &mut y.payload);
+                info.candidate_log_density[0] = y.log_density;
+                if y.log_density.is_nan() || y.log_density == f64::INFINITY {
+                    info.non_finite = true;
+                    0.0
+                } else {
+                    // The bug: the Hastings term is dropped.
+                    mh_accept_prob(current.log_density, y.log_density, 0.0)
+                }
+            }
+        };
+        info.accept_prob[0] = a;
+        observer.splat(current, 1.0 - a);
+        if a > 0.0 {
+            observer.splat(y, a);
+        }
+        if a >= 1.0 || (a > 0.0 && rng.random::<f64>() < a) {
+            std::mem::swap(current, y);
+            info.accepted_stage = 1;
+        }
+        observer.step(&info);
+        info
+    }
+
+    fn log_flow(&self, _target: &T, path: &[SampleOf<T>]) -> f64 {
+        let [x, y] = path else {
+            return f64::NEG_INFINITY;
+        };
+        let terms: Vec<f64> = (0..self.proposal.num_components())
+            .map(|j| {
+                // The flow of what the kernel really does: true q, acceptance without Hastings.
+                let log_a = mh_log_accept_prob(x.log_density, y.log_density, 0.0);
+                x.log_density + self.proposal.log_q_component(j, &x.state, &y.state) + log_a
+            })
+            .collect();
+        log_sum_exp(&terms)
+    }
+}
+
+/// Forces acceptance of the candidate after `max_rejections` consecutive rejections, as
+/// LuxRender's and Corona's Metropolis samplers do ("maxconsecrejects") to escape sticky
+/// states. It breaks detailed balance (DESIGN.md: "No forced acceptance after many
+/// rejections"), which the stationarity test exposes.
+///
+/// The wrapped kernel runs normally; if it rejected and the previous `max_rejections` steps
+/// were all rejections, the last candidate it evaluated (left in
+/// `scratch[stages_tried - 1]` by [`crate::Mh`] and by kernels that propose stage `s` into
+/// `scratch[s - 1]`) is accepted anyway, provided its density is positive and finite.
+/// Observers see the wrapped kernel's weights. `log_flow` reports the wrapped kernel's
+/// (claimed) flow, so pairwise checks cannot see the bug: only the stationarity test can.
+#[derive(Clone, Debug)]
+pub struct ForcedAcceptance<K> {
+    /// The wrapped kernel.
+    pub inner: K,
+    /// Consecutive rejections after which the next candidate is accepted.
+    pub max_rejections: u32,
+    rejections: u32,
+}
+
+impl<K> ForcedAcceptance<K> {
+    /// Wraps `inner`, forcing acceptance after `max_rejections` consecutive rejections.
+    pub fn new(inner: K, max_rejections: u32) -> Self {
+        Self {
+            inner,
+            max_rejections,
+            rejections: 0,
+        }
+    }
+}
+
+impl<T: Target, K: Kernel<T>> Kernel<T> for ForcedAcceptance<K> {
+    fn stages(&self) -> usize {
+        self.inner.stages()
+    }
+
+    fn step<R, O>(
+        &mut self,
+        target: &T,
+        current: &mut SampleOf<T>,
+        scratch: &mut [SampleOf<T>],
+        rng: &mut R,
+        observer: &mut O,
+    ) -> StepInfo
+    where
+        R: Rng + ?Sized,
+        O: Observer<T::State, T::Payload> + ?Sized,
+    {
+        let mut info = self.inner.step(target, current, scratch, rng, observer);
+        if info.accepted() {
+            self.rejections = 0;
+            return info;
+        }
+        let stage = usize::from(info.stages_tried.max(1));
+        let candidate = info.candidate_log_density[stage - 1];
+        if self.rejections >= self.max_rejections && candidate.is_finite() && !info.non_finite {
+            // The bug: accept regardless of the acceptance probability.
+            std::mem::swap(current, &mut scratch[stage - 1]);
+            info.accepted_stage = stage as u8;
+            self.rejections = 0;
+        } else {
+            self.rejections += 1;
+        }
+        info
+    }
+
+    fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
+        self.inner.log_flow(target, path)
+    }
+
+    fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
+        self.inner.reverse_path(target, path)
+    }
+}
