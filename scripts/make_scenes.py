@@ -19,7 +19,6 @@ gives byte-identical files. Conventions (see docs/scenes.md):
 * thin lens / motion blur parameters live in the camera node's `extras`.
 """
 
-import base64  # noqa: F401  (kept: the brief allows data URIs; textures are separate files)
 import json
 import math
 import os
@@ -71,7 +70,7 @@ def f32(x):
 
 
 def jf(x):
-    """A float for the JSON: float32-rounded and printed with 7 significant digits."""
+    """A float for the JSON: rounded to 7 significant digits (about float32 precision)."""
     v = float("%.7g" % x)
     return 0.0 if v == 0 else v
 
@@ -561,7 +560,7 @@ def scene_cornell_glass():
 def scene_caustic_pool():
     s = Scene("caustic-pool", "Caustics through a smooth, wavy water surface (ior 1.33) onto a tiled pool "
                               "floor, lit by a small bright area light.")
-    s.emitter("light", (300.0, 285.0, 255.0))
+    s.emitter("light", (135.0, 128.0, 115.0))
     s.diffuse("pool-floor", (1.0, 1.0, 1.0), texture="textures/pool-tiles.png")
     s.diffuse("pool-wall", (0.45, 0.65, 0.75))
     s.diffuse("deck", (0.6, 0.58, 0.55))
@@ -612,7 +611,7 @@ def scene_caustic_pool():
 
     s.mesh("water-surface", heightfield(-1, 1, -1, 1, 160, height, grad), "water")
     # small, bright light high above, slightly off-centre so the caustics are not symmetric
-    y, h = 3.0, 0.1
+    y, h = 3.0, 0.15
     cx, cz = 0.4, -0.5
     s.mesh("light", quad((cx - h, y, cz - h), (cx + h, y, cz - h), (cx + h, y, cz + h), (cx - h, y, cz + h),
                          facing=(0, -1, 0)), "light")
@@ -623,7 +622,7 @@ def scene_caustic_pool():
 def scene_ajar_door():
     s = Scene("ajar-door", "Difficult visibility (Veach's ajar door): the light is in a second room; the "
                            "camera's room is lit only through the gap of a slightly open door.")
-    s.emitter("light", (120.0, 108.0, 90.0))
+    s.emitter("light", (2500.0, 2250.0, 1875.0))
     s.diffuse("wall", (0.7, 0.7, 0.68))
     s.diffuse("floor", (0.45, 0.33, 0.22))
     s.diffuse("door", (0.55, 0.42, 0.3))
@@ -646,12 +645,14 @@ def scene_ajar_door():
     shell.extend(box(((W + d1) / 2, H / 2, 0), (W - d1, H, 2 * t), bottom=False))
     shell.extend(box(((d0 + d1) / 2, (dh + H) / 2, 0), (d1 - d0, H - dh, 2 * t)))
     s.mesh("walls", shell, "wall")
-    # the door: hinged at x = d0 on the far side of the wall, opened by 9 degrees into room 2
-    dw, dt, ang = d1 - d0 - 0.01, 0.04, 9.0
-    local = box((dw / 2, dh / 2 - 0.005, -dt / 2), (dw, dh - 0.02, dt), bottom=True)
+    # the door: on the far side of the wall, larger than the doorway (it overlaps the wall by
+    # 3 cm at the hinge and at the top, so no light leaks around it), hinged at x = d0 - 0.03,
+    # opened by 12 degrees into room 2: the only opening is the slit at the free edge
+    dw, dt, ang, hinge = d1 - d0 + 0.02, 0.04, 12.0, d0 - 0.03
+    local = box((dw / 2, (dh + 0.03) / 2, -dt / 2), (dw, dh + 0.03, dt), bottom=True)
     door = Geom()
     for p, n in zip(local.pos, local.nrm):
-        door.vert(add((d0, 0.005, -t - 0.002), rot_y(p, ang)), rot_y(n, ang))
+        door.vert(add((hinge, 0.002, -t - 0.0005), rot_y(p, ang)), rot_y(n, ang))
     door.idx = list(local.idx)
     s.mesh("door", door, "door")
     # furniture in the camera's room (z > 0): a table with a brass sphere and a blue vase
@@ -676,7 +677,8 @@ def scene_glossy_highlight():
     s = Scene("glossy-highlight", "A thin highlight on a low-roughness metal plate: the reflection of a long, "
                                   "thin, bright light strip seen at a grazing angle (Kelemen's failure case, "
                                   "DR paper Fig. 10).")
-    s.emitter("strip", (250.0, 250.0, 240.0))
+    s.emitter("strip", (30.0, 30.0, 28.8))
+    s.emitter("fill", (3.0, 3.0, 3.0))
     s.metal("plate", (0.95, 0.93, 0.88), 0.08)
     s.diffuse("floor", (0.5, 0.5, 0.5))
     s.diffuse("backdrop", (0.65, 0.62, 0.58))
@@ -699,6 +701,9 @@ def scene_glossy_highlight():
     corners = [add(sc, add(mul((1.0, 0.0, 0.0), sx * hl), mul(across, sy * hw)))
                for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
     s.mesh("strip", quad(*corners, facing=nrm), "strip")
+    # a dim, large fill panel overhead behind the camera lights the backdrop; the plate cannot
+    # mirror it into the camera (the camera sees the plate reflect the backdrop)
+    s.mesh("fill", quad((-2, 3, 0.5), (2, 3, 0.5), (2, 3, 3.0), (-2, 3, 3.0), facing=(0, -1, 0)), "fill")
     s.camera(eye, (0.0, 0.08, -0.3), 35.0)
     return s
 
@@ -762,7 +767,7 @@ def scene_glossy_diffuse():
     lx, ly, lz, h = 0.35, 1.3, 0.25, 0.25
     s.mesh("light", quad((lx - h, ly, lz - h), (lx + h, ly, lz - h), (lx + h, ly, lz + h), (lx - h, ly, lz + h),
                          facing=(0, -1, 0)), "light")
-    s.camera((0.0, 0.95, 1.15), (0.0, 0.02, -0.02), 42.0)
+    s.camera((0.0, 0.95, 1.15), (0.0, 0.02, -0.02), 38.0)
     return s
 
 
@@ -771,7 +776,7 @@ def scene_dof():
     focus = length(sub(target, eye))
     s = Scene("dof", "Depth of field: objects at several depths on a checker floor, a thin lens focused on "
                      "the middle sphere, small emitters in the background for bokeh.")
-    s.emitter("light", (6.0, 6.0, 5.6))
+    s.emitter("light", (10.0, 10.0, 9.4))
     s.emitter("bokeh", (40.0, 30.0, 12.0))
     s.diffuse("floor", (1.0, 1.0, 1.0), texture="textures/checker.png")
     s.diffuse("backdrop", (0.5, 0.5, 0.55))
@@ -782,10 +787,10 @@ def scene_dof():
     s.mesh("floor", quad((-4, 0, -7), (-4, 0, 1), (4, 0, 1), (4, 0, -7), facing=(0, 1, 0),
                          uvs=[(0, 0), (0, 1), (1, 1), (1, 0)]), "floor")
     s.mesh("backdrop", quad((-4, 0, -7), (4, 0, -7), (4, 4, -7), (-4, 4, -7), facing=(0, 0, 1)), "backdrop")
-    s.mesh("near-sphere", uv_sphere((-0.45, 0.3, 1.6), 0.3, 64, 32), "red")
+    s.mesh("near-sphere", uv_sphere((-0.2, 0.22, 1.4), 0.22, 64, 32), "red")
     s.mesh("middle-sphere", uv_sphere(target, 0.4, 96, 48), "white")
     s.mesh("middle-chrome", uv_sphere((0.75, 0.25, -0.9), 0.25, 64, 32), "chrome")
-    s.mesh("far-box", box((1.1, 0.45, -4.2), (0.9, 0.9, 0.9), rot_deg=30.0, bottom=False), "blue")
+    s.mesh("far-box", box((0.95, 0.35, -4.2), (0.7, 0.7, 0.7), rot_deg=30.0, bottom=False), "blue")
     s.mesh("far-sphere", uv_sphere((-1.3, 0.5, -5.0), 0.5, 64, 32), "white")
     bokeh = Geom()
     for i in range(7):
@@ -802,9 +807,9 @@ def scene_dof():
 
 def scene_motion_blur():
     eye = (0.0, 1.0, 3.0)
-    s = Scene("motion-blur", "Camera motion blur: the camera translates 0.25 m to the right during the shutter "
+    s = Scene("motion-blur", "Camera motion blur: the camera translates 0.15 m to the right during the shutter "
                              "over a scene of high-contrast vertical bars and boxes.")
-    s.emitter("light", (8.0, 8.0, 7.5))
+    s.emitter("light", (15.0, 15.0, 14.0))
     s.diffuse("floor", (0.55, 0.55, 0.55))
     s.diffuse("white", (0.8, 0.8, 0.8))
     s.diffuse("black", (0.03, 0.03, 0.03))
@@ -826,7 +831,7 @@ def scene_motion_blur():
     h = 0.6
     s.mesh("light", quad((-h, 2.5, 0.5 - h), (h, 2.5, 0.5 - h), (h, 2.5, 0.5 + h), (-h, 2.5, 0.5 + h),
                          facing=(0, -1, 0)), "light")
-    end = add(eye, (0.25, 0.0, 0.0))
+    end = add(eye, (0.15, 0.0, 0.0))
     s.camera(eye, (0.0, 0.8, 0.0), 40.0, extras={
         "shutter_open": 0.0, "shutter_close": 1.0, "motion_end_translation": [jf(c) for c in end]})
     return s

@@ -52,7 +52,11 @@ fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 fn dot(a: V3, b: V3) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -99,7 +103,11 @@ fn scenes_follow_the_conventions() {
             panic!("{name}: camera is not perspective");
         };
         assert_eq!(p.aspect_ratio(), Some(1.0), "{name}: aspectRatio");
-        assert!(p.yfov() > 0.1 && p.yfov() < 2.0, "{name}: yfov {}", p.yfov());
+        assert!(
+            p.yfov() > 0.1 && p.yfov() < 2.0,
+            "{name}: yfov {}",
+            p.yfov()
+        );
         let (_, rot, scale) = cameras[0].transform().decomposed();
         let qn = rot.iter().map(|c| c * c).sum::<f32>().sqrt();
         assert!((qn - 1.0).abs() < 1e-5, "{name}: camera rotation not unit");
@@ -118,7 +126,11 @@ fn scenes_follow_the_conventions() {
                 node.name()
             );
             for prim in mesh.primitives() {
-                assert_eq!(prim.mode(), gltf::mesh::Mode::Triangles, "{name}: not triangles");
+                assert_eq!(
+                    prim.mode(),
+                    gltf::mesh::Mode::Triangles,
+                    "{name}: not triangles"
+                );
                 let reader = prim.reader(|b| Some(&buffers[b.index()]));
                 let pos: Vec<V3> = reader.read_positions().expect("POSITION").collect();
                 let nrm: Vec<V3> = reader
@@ -129,7 +141,10 @@ fn scenes_follow_the_conventions() {
                 assert_eq!(pos.len(), nrm.len());
                 assert_eq!(idx.len() % 3, 0);
                 for n in &nrm {
-                    assert!((len(*n) - 1.0).abs() < 1e-3, "{name}: non-unit normal {n:?}");
+                    assert!(
+                        (len(*n) - 1.0).abs() < 1e-3,
+                        "{name}: non-unit normal {n:?}"
+                    );
                 }
                 let mat = prim.material();
                 let emissive = mat.emissive_strength().unwrap_or(1.0) > 0.0
@@ -197,7 +212,10 @@ fn scenes_follow_the_conventions() {
             let ef = mat.emissive_factor();
             if ef.iter().any(|&c| c > 0.0) {
                 let m = ef.iter().cloned().fold(0.0f32, f32::max);
-                assert!((m - 1.0).abs() < 1e-6, "{name}: emissiveFactor {ef:?} not normalised");
+                assert!(
+                    (m - 1.0).abs() < 1e-6,
+                    "{name}: emissiveFactor {ef:?} not normalised"
+                );
                 assert!(
                     mat.emissive_strength().is_some_and(|s| s > 0.0),
                     "{name}: emitter {:?} without KHR_materials_emissive_strength",
@@ -206,7 +224,10 @@ fn scenes_follow_the_conventions() {
             }
             if let Some(t) = mat.transmission() {
                 assert_eq!(t.transmission_factor(), 1.0);
-                assert!(mat.ior().is_some(), "{name}: glass without KHR_materials_ior");
+                assert!(
+                    mat.ior().is_some(),
+                    "{name}: glass without KHR_materials_ior"
+                );
             }
         }
         for img in &images {
@@ -254,15 +275,21 @@ fn cornell_glass_matches_the_peer_scene() {
 #[test]
 fn camera_extras_for_thin_lens_and_motion_blur() {
     let dof = camera_node_json("dof");
-    let ar = dof["extras"]["aperture_radius"].as_f64().expect("aperture_radius");
-    let fd = dof["extras"]["focus_distance"].as_f64().expect("focus_distance");
+    let ar = dof["extras"]["aperture_radius"]
+        .as_f64()
+        .expect("aperture_radius");
+    let fd = dof["extras"]["focus_distance"]
+        .as_f64()
+        .expect("focus_distance");
     assert!(ar > 0.0 && fd > 0.0, "dof: aperture {ar}, focus {fd}");
     let mb = camera_node_json("motion-blur");
     let ex = &mb["extras"];
     let open = ex["shutter_open"].as_f64().expect("shutter_open");
     let close = ex["shutter_close"].as_f64().expect("shutter_close");
     assert!(open < close);
-    let end = ex["motion_end_translation"].as_array().expect("motion_end_translation");
+    let end = ex["motion_end_translation"]
+        .as_array()
+        .expect("motion_end_translation");
     let start = mb["translation"].as_array().expect("translation");
     assert_eq!(end.len(), 3);
     let moved: f64 = (0..3)
@@ -278,7 +305,11 @@ fn camera_extras_for_thin_lens_and_motion_blur() {
 fn khronos_validator_reports_no_errors() {
     let root = repo_root();
     let script = root.join("scripts/validate_scenes.sh");
-    let out = match Command::new("bash").arg(&script).arg(root.join("scenes")).output() {
+    let out = match Command::new("bash")
+        .arg(&script)
+        .arg(root.join("scenes"))
+        .output()
+    {
         Ok(out) => out,
         Err(e) => {
             eprintln!("SKIPPED khronos_validator_reports_no_errors: cannot run bash: {e}");
@@ -302,7 +333,10 @@ fn khronos_validator_reports_no_errors() {
                 );
             }
         }
-        _ => panic!("glTF validator found errors ({:?}):\n{stdout}\n{stderr}", out.status),
+        _ => panic!(
+            "glTF validator found errors ({:?}):\n{stdout}\n{stderr}",
+            out.status
+        ),
     }
 }
 
@@ -310,7 +344,8 @@ fn khronos_validator_reports_no_errors() {
 #[test]
 fn generator_reproduces_the_committed_scenes() {
     let root = repo_root();
-    let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("scenes-{}", std::process::id()));
+    let out_dir =
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("scenes-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out_dir);
     let run = Command::new("python3")
         .arg(root.join("scripts/make_scenes.py"))
