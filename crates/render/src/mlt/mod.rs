@@ -7,4 +7,6 @@ mod splat;
 
 pub use bootstrap::{bootstrap_key, Bootstrap};
 pub use driver::{render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings};
+mod path_sampler;
+pub use path_sampler::{MmltTarget, PathPayload, PssmltTarget, PATH_STREAMS};
 pub use splat::{luminance, Splat, SplatBuffer, SplatObserver, SplatPayload};

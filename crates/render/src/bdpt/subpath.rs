@@ -1,0 +1,214 @@
+//! Camera and light subpaths: random walks driven by a sampler (pbrt-v3 section 16.3.1).
+
+use glam::{Vec2, Vec3, Vec3A};
+
+use super::scene_api::{self, SceneRef};
+use super::vertex::{Vertex, VertexKind};
+use crate::camera::Ray;
+use crate::frame::Frame;
+use crate::material::TransportMode;
+use crate::sampler::{Sampler, Stream};
+
+/// Russian roulette: from this many vertices on, a walk continues with probability
+/// `q = min(0.95, max component of f |cos| / pdf)` of the last bounce. Roulette only divides
+/// the throughput by `q`; MIS weights are computed from roulette-free densities, which keeps
+/// every strategy unbiased (the weights still sum to one over the strategies that can
+/// sample a path) at a small cost in MIS optimality.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Roulette {
+    /// First subpath vertex index (bounce count) where roulette may stop the walk; `None`
+    /// disables roulette (MMLT, whose path length is fixed, disables it).
+    pub start: Option<u32>,
+}
+
+/// Max component of an RGB value.
+#[inline]
+fn max_component(v: Vec3) -> f32 {
+    v.x.max(v.y).max(v.z)
+}
+
+/// Extends `path` (which already holds the walk's origin at `path[origin]`) by tracing `ray`
+/// and sampling BSDFs, up to `max_new` new vertices. Returns the number of vertices added.
+///
+/// `pdf_dir` is the solid-angle density with which `ray.dir` was sampled at the origin.
+#[allow(clippy::too_many_arguments)]
+pub fn random_walk<S: Sampler + ?Sized>(
+    scene: SceneRef<'_>,
+    mut ray: Ray,
+    sampler: &mut S,
+    mut beta: Vec3,
+    pdf_dir: f32,
+    max_new: usize,
+    mode: TransportMode,
+    roulette: Roulette,
+    path: &mut [Vertex],
+    origin: usize,
+) -> usize {
+    if max_new == 0 {
+        return 0;
+    }
+    let mut pdf_fwd = pdf_dir;
+    let mut added = 0;
+    loop {
+        let Some(hit) = scene_api::intersect(scene, &ray) else {
+            break;
+        };
+        let idx = origin + 1 + added;
+        let prev = path[idx - 1];
+        let mut v = Vertex {
+            kind: VertexKind::Surface,
+            p: hit.p,
+            p_error: hit.p_error,
+            ng: hit.ng,
+            frame: Frame::from_normal(hit.ns),
+            wo: -ray.dir,
+            bsdf: Some(hit.bsdf),
+            light: hit.light,
+            beta,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+            delta: false,
+            time: ray.time,
+        };
+        v.pdf_fwd = prev.convert_density(pdf_fwd, &v);
+        path[idx] = v;
+        added += 1;
+        if added >= max_new {
+            break;
+        }
+        let wo_local = v.frame.to_local(v.wo);
+        let u = sampler.next_1d();
+        let u2 = sampler.next_2d();
+        let Some(bs) = hit.bsdf.sample(wo_local, u, u2, mode) else {
+            break;
+        };
+        if bs.pdf <= 0.0 || bs.f == Vec3::ZERO {
+            break;
+        }
+        let wi = v.frame.to_world(bs.wi);
+        let cos = bs.wi.z.abs();
+        let mut factor = bs.f * (cos / bs.pdf);
+        if mode == TransportMode::Importance {
+            factor *= shading_normal_correction(v.wo, wi, v.ng, v.ns());
+        }
+        beta *= factor;
+        pdf_fwd = bs.pdf;
+        let mut pdf_rev = hit.bsdf.pdf(bs.wi, wo_local, TransportMode::Radiance);
+        if bs.is_specular {
+            path[idx].delta = true;
+            pdf_rev = 0.0;
+            pdf_fwd = 0.0;
+        }
+        if let Some(start) = roulette.start {
+            if added as u32 >= start {
+                let q = max_component(factor).min(0.95);
+                if q <= 0.0 || sampler.next_1d() >= q {
+                    break;
+                }
+                beta /= q;
+            }
+        }
+        if !beta.is_finite() || beta == Vec3::ZERO {
+            break;
+        }
+        let here = path[idx];
+        path[idx - 1].pdf_rev = here.convert_density(pdf_rev, &path[idx - 1]);
+        ray = scene_api::spawn_ray(&here, wi);
+    }
+    added
+}
+
+/// Veach's correction for shading normals in adjoint (importance) transport:
+/// `|wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)` (Veach 1997, eq. 5.19; pbrt-v3 section 16.1.3).
+#[inline]
+fn shading_normal_correction(wo: Vec3A, wi: Vec3A, ng: Vec3A, ns: Vec3A) -> f32 {
+    let denom = wo.dot(ng).abs() * wi.dot(ns).abs();
+    if denom == 0.0 {
+        return 0.0;
+    }
+    wo.dot(ns).abs() * wi.dot(ng).abs() / denom
+}
+
+/// Generates a camera subpath of at most `max_vertices` vertices (including the camera
+/// vertex) for the raster position `p_raster` into `path`; returns its length. Random numbers:
+/// stream [`Stream::Camera`]: lens (2), time (1), then 3 per bounce (+1 with roulette).
+pub fn camera_subpath<S: Sampler + ?Sized>(
+    scene: SceneRef<'_>,
+    sampler: &mut S,
+    p_raster: Vec2,
+    max_vertices: usize,
+    roulette: Roulette,
+    path: &mut [Vertex],
+) -> usize {
+    if max_vertices == 0 {
+        return 0;
+    }
+    sampler.start_stream(Stream::Camera);
+    let u_lens = sampler.next_2d();
+    let u_time = sampler.next_1d();
+    let ray = scene_api::generate_ray(scene, p_raster, u_lens, u_time);
+    let pdf_dir = scene_api::camera_pdf_dir(scene, &ray);
+    path[0] = Vertex::camera(
+        ray.origin,
+        scene_api::camera_forward(scene, ray.time),
+        Vec3::ONE,
+        ray.time,
+    );
+    1 + random_walk(
+        scene,
+        ray,
+        sampler,
+        Vec3::ONE,
+        pdf_dir,
+        max_vertices - 1,
+        TransportMode::Radiance,
+        roulette,
+        path,
+        0,
+    )
+}
+
+/// Generates a light subpath of at most `max_vertices` vertices: a point on an emitter chosen
+/// in proportion to power and uniformly by area, a cosine-weighted emission direction, then a
+/// random walk in importance mode. Random numbers: stream [`Stream::Light`]: light choice (1),
+/// position (2), direction (2), then 3 per bounce (+1 with roulette).
+pub fn light_subpath<S: Sampler + ?Sized>(
+    scene: SceneRef<'_>,
+    sampler: &mut S,
+    time: f32,
+    max_vertices: usize,
+    roulette: Roulette,
+    path: &mut [Vertex],
+) -> usize {
+    if max_vertices == 0 {
+        return 0;
+    }
+    sampler.start_stream(Stream::Light);
+    let u_light = sampler.next_1d();
+    let u_pos = sampler.next_2d();
+    let u_dir = sampler.next_2d();
+    let Some(le) = scene.lights().sample_le(u_light, u_pos, u_dir) else {
+        return 0;
+    };
+    if le.pdf_pos <= 0.0 || le.pdf_dir <= 0.0 || le.radiance == Vec3::ZERO {
+        return 0;
+    }
+    let front = scene.lights().lights()[le.light as usize].normal;
+    path[0] = Vertex::light(le.p, front, le.light, le.radiance, le.pdf_pos, time);
+    let cos = le.n.dot(le.dir).abs();
+    let beta = le.radiance * (cos / (le.pdf_pos * le.pdf_dir));
+    let pdf_dir = le.pdf_dir;
+    let ray = scene_api::spawn_ray(&path[0], le.dir);
+    1 + random_walk(
+        scene,
+        ray,
+        sampler,
+        beta,
+        pdf_dir,
+        max_vertices - 1,
+        TransportMode::Importance,
+        roulette,
+        path,
+        0,
+    )
+}

@@ -1,0 +1,238 @@
+//! Path vertices of bidirectional path tracing and the densities MIS needs (Veach 1997,
+//! chapter 10; pbrt-v3 section 16.3).
+
+use glam::{Vec3, Vec3A};
+
+use super::scene_api::{self, SceneRef};
+use crate::camera::Ray;
+use crate::frame::Frame;
+use crate::material::{Bsdf, TransportMode};
+
+/// Maximum number of vertices of a subpath (max depth 62 + 2 endpoints).
+pub const MAX_VERTICES: usize = 64;
+
+/// What a vertex is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexKind {
+    /// The camera (lens) endpoint.
+    Camera,
+    /// A point sampled on an emitter as the light subpath's origin.
+    Light,
+    /// A scattering point on a surface (possibly on an emitter).
+    Surface,
+}
+
+/// One vertex of a camera or light subpath.
+#[derive(Clone, Copy, Debug)]
+pub struct Vertex {
+    /// What the vertex is.
+    pub kind: VertexKind,
+    /// Position.
+    pub p: Vec3A,
+    /// Conservative floating-point error bound of `p` (for ray offsets).
+    pub p_error: Vec3A,
+    /// Geometric normal (zero for the camera).
+    pub ng: Vec3A,
+    /// Shading frame (z = shading normal); for lights the frame of the geometric normal.
+    pub frame: Frame,
+    /// Direction towards the previous vertex of the subpath (surfaces only).
+    pub wo: Vec3A,
+    /// The BSDF at a surface vertex.
+    pub bsdf: Option<Bsdf>,
+    /// Emitter id if the point lies on an emitter.
+    pub light: Option<u32>,
+    /// Subpath throughput up to and including this vertex (divided by its pdf).
+    pub beta: Vec3,
+    /// Area density of sampling this vertex from its predecessor (forward).
+    pub pdf_fwd: f32,
+    /// Area density of sampling this vertex from its successor (reverse).
+    pub pdf_rev: f32,
+    /// True if the vertex was sampled from a delta distribution (specular scattering).
+    pub delta: bool,
+    /// Time of the path (motion blur).
+    pub time: f32,
+}
+
+impl Vertex {
+    /// A camera vertex at lens point `p` with forward direction `forward`.
+    pub fn camera(p: Vec3A, forward: Vec3A, beta: Vec3, time: f32) -> Self {
+        Self {
+            kind: VertexKind::Camera,
+            p,
+            p_error: Vec3A::ZERO,
+            ng: Vec3A::ZERO,
+            frame: Frame::from_normal(forward),
+            wo: Vec3A::ZERO,
+            bsdf: None,
+            light: None,
+            beta,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+            delta: false,
+            time,
+        }
+    }
+
+    /// A light vertex.
+    pub fn light(p: Vec3A, n: Vec3A, light: u32, beta: Vec3, pdf_fwd: f32, time: f32) -> Self {
+        Self {
+            kind: VertexKind::Light,
+            p,
+            p_error: p.abs() * 1e-6,
+            ng: n,
+            frame: Frame::from_normal(n),
+            wo: Vec3A::ZERO,
+            bsdf: None,
+            light: Some(light),
+            beta,
+            pdf_fwd,
+            pdf_rev: 0.0,
+            delta: false,
+            time,
+        }
+    }
+
+    /// True for surface vertices (the only ones with a normal that converts densities).
+    #[inline]
+    pub fn on_surface(&self) -> bool {
+        self.kind != VertexKind::Camera
+    }
+
+    /// Shading normal.
+    #[inline]
+    pub fn ns(&self) -> Vec3A {
+        self.frame.n
+    }
+
+    /// True if the vertex can be connected to (non-delta scattering, or an endpoint).
+    #[inline]
+    pub fn is_connectible(&self) -> bool {
+        match self.kind {
+            VertexKind::Camera | VertexKind::Light => true,
+            VertexKind::Surface => self.bsdf.is_some_and(|b| !b.is_specular()),
+        }
+    }
+
+    /// True if the point lies on an emitter.
+    #[inline]
+    pub fn is_emissive(&self) -> bool {
+        self.light.is_some()
+    }
+
+    /// BSDF value for light arriving from `next` and leaving towards `wo` (surfaces only).
+    #[inline]
+    pub fn f(&self, next: &Vertex, mode: TransportMode) -> Vec3 {
+        let Some(bsdf) = self.bsdf else {
+            return Vec3::ZERO;
+        };
+        let wi = (next.p - self.p).normalize_or_zero();
+        bsdf.eval(self.frame.to_local(self.wo), self.frame.to_local(wi), mode)
+    }
+
+    /// Emitted radiance leaving this point towards the point `towards`.
+    #[inline]
+    pub fn emitted_towards(&self, scene: SceneRef<'_>, towards: Vec3A) -> Vec3 {
+        match self.light {
+            Some(l) => scene_api::light_le(scene, l, (towards - self.p).normalize_or_zero()),
+            None => Vec3::ZERO,
+        }
+    }
+
+    /// Converts a solid-angle density at this vertex towards `next` into an area density at
+    /// `next` (pbrt-v3 `Vertex::ConvertDensity`).
+    #[inline]
+    pub fn convert_density(&self, pdf: f32, next: &Vertex) -> f32 {
+        let w = next.p - self.p;
+        let d2 = w.length_squared();
+        if d2 == 0.0 {
+            return 0.0;
+        }
+        let inv_d2 = 1.0 / d2;
+        let mut pdf = pdf;
+        if next.on_surface() {
+            pdf *= next.ng.dot(w * inv_d2.sqrt()).abs();
+        }
+        pdf * inv_d2
+    }
+
+    /// Area density at `next` of continuing the subpath from this vertex, having arrived from
+    /// `prev` (pbrt-v3 `Vertex::Pdf`).
+    pub fn pdf(&self, scene: SceneRef<'_>, prev: Option<&Vertex>, next: &Vertex) -> f32 {
+        if self.kind == VertexKind::Light {
+            return self.pdf_light(scene, next);
+        }
+        let wn = next.p - self.p;
+        if wn.length_squared() == 0.0 {
+            return 0.0;
+        }
+        let wn = wn.normalize();
+        let pdf = match self.kind {
+            VertexKind::Camera => {
+                let ray = Ray {
+                    origin: self.p,
+                    dir: wn,
+                    time: self.time,
+                };
+                scene_api::camera_pdf_dir(scene, &ray)
+            }
+            _ => {
+                let (Some(bsdf), Some(prev)) = (self.bsdf, prev) else {
+                    return 0.0;
+                };
+                let wp = (prev.p - self.p).normalize_or_zero();
+                bsdf.pdf(
+                    self.frame.to_local(wp),
+                    self.frame.to_local(wn),
+                    TransportMode::Radiance,
+                )
+            }
+        };
+        self.convert_density(pdf, next)
+    }
+
+    /// Area density at `next` of emitting from this emitter point towards it: the light's
+    /// cosine-weighted emission density (pbrt-v3 `Vertex::PdfLight` for area lights).
+    pub fn pdf_light(&self, scene: SceneRef<'_>, next: &Vertex) -> f32 {
+        let Some(light) = self.light else { return 0.0 };
+        let w = next.p - self.p;
+        let d2 = w.length_squared();
+        if d2 == 0.0 {
+            return 0.0;
+        }
+        let w = w / d2.sqrt();
+        let mut pdf = scene_api::light_pdf_dir(scene, light, w) / d2;
+        if next.on_surface() {
+            pdf *= next.ng.dot(w).abs();
+        }
+        pdf
+    }
+
+    /// Area density of sampling this emitter point as a light-subpath origin: light
+    /// selection probability times the uniform area density (pbrt-v3 `PdfLightOrigin`).
+    pub fn pdf_light_origin(&self, scene: SceneRef<'_>) -> f32 {
+        self.light
+            .map_or(0.0, |l| scene_api::light_pdf_area(scene, l))
+    }
+}
+
+/// Geometry term `G = |cos_0| |cos_1| / d^2` between two vertices, times visibility (pbrt-v3
+/// `G`, using shading normals at surfaces).
+pub fn geometry_term(scene: SceneRef<'_>, v0: &Vertex, v1: &Vertex) -> f32 {
+    let d = v0.p - v1.p;
+    let d2 = d.length_squared();
+    if d2 == 0.0 {
+        return 0.0;
+    }
+    let dn = d / d2.sqrt();
+    let mut g = 1.0 / d2;
+    if v0.on_surface() {
+        g *= v0.ns().dot(dn).abs();
+    }
+    if v1.on_surface() {
+        g *= v1.ns().dot(dn).abs();
+    }
+    if g == 0.0 || !scene_api::visible(scene, v0, v1) {
+        return 0.0;
+    }
+    g
+}
