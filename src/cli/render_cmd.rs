@@ -1,0 +1,218 @@
+//! `chainlight render`: flags to `RenderSettings`, progress bar, Ctrl-C, EXR + PNG output, summary.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use clap::Args;
+use render::image_io;
+use render::scene::Scene;
+use render::session::{self, Budget, RenderOutput, RenderSettings};
+
+use super::integrator::IntegratorChoice;
+use super::progress::BarProgress;
+use super::{parse, CliResult};
+
+/// The largest `--width` / `--height`.
+const MAX_SIDE: u32 = 16_384;
+
+/// Set by the Ctrl-C handler; the session polls it and returns the partial image.
+static CANCEL: AtomicBool = AtomicBool::new(false);
+
+/// Arguments of `chainlight render`.
+#[derive(Debug, Args)]
+#[command(
+    after_help = "Ctrl-C stops the render early and still writes the image rendered so far; \
+                        a second Ctrl-C aborts without writing."
+)]
+pub(crate) struct RenderArgs {
+    /// A glTF 2.0 scene (.gltf or .glb) [default: the built-in Cornell box].
+    #[arg(value_name = "SCENE")]
+    scene: Option<PathBuf>,
+    /// The light-transport algorithm.
+    #[arg(long, value_enum, default_value = "pt")]
+    integrator: IntegratorChoice,
+    /// Samples per pixel (for MCMC integrators: mutations per pixel) [default: 16].
+    #[arg(long, allow_negative_numbers = true, value_name = "N", conflicts_with = "time",
+          value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    spp: Option<u32>,
+    /// Render for this many seconds instead of a fixed sample count (not bit-reproducible).
+    #[arg(long, allow_negative_numbers = true, value_name = "SECONDS", value_parser = parse::seconds)]
+    time: Option<Duration>,
+    /// Worker threads, 1..=1024 [default: the available parallelism]. The image does not depend on it.
+    #[arg(long, allow_negative_numbers = true, value_name = "T", value_parser = clap::value_parser!(u16).range(1..=1024))]
+    threads: Option<u16>,
+    /// Master seed; the same seed gives a bit-identical image under --spp.
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        value_name = "K",
+        default_value_t = 0
+    )]
+    seed: u64,
+    /// Image width in pixels, 1..=16384.
+    #[arg(long, allow_negative_numbers = true, value_name = "W", default_value_t = 256,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SIDE)))]
+    width: u32,
+    /// Image height in pixels, 1..=16384.
+    #[arg(long, allow_negative_numbers = true, value_name = "H", default_value_t = 256,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SIDE)))]
+    height: u32,
+    /// Maximum path depth (bounces), 0..=1024; 0 shows only directly visible emitters.
+    #[arg(long, allow_negative_numbers = true, value_name = "D", default_value_t = 5,
+          value_parser = clap::value_parser!(u32).range(0..=1024))]
+    max_depth: u32,
+    /// Output OpenEXR file; a tonemapped PNG preview is written next to it (same stem, .png).
+    #[arg(short, long, value_name = "OUT.exr", default_value = "chainlight.exr")]
+    output: PathBuf,
+    /// Exposure of the PNG preview in stops, -64..=64 (the EXR is never scaled).
+    #[arg(long, allow_negative_numbers = true, value_name = "STOPS", default_value = "0", value_parser = parse::stops)]
+    exposure: f32,
+}
+
+/// The default `--spp`.
+const DEFAULT_SPP: u32 = 16;
+
+/// Checks the paths before rendering, so a long render never ends in an unwritable output.
+fn check_paths(args: &RenderArgs) -> CliResult<PathBuf> {
+    let is_ext = |p: &Path, ext: &str| {
+        p.extension()
+            .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case(ext))
+    };
+    if let Some(scene) = &args.scene {
+        if !(is_ext(scene, "gltf") || is_ext(scene, "glb")) {
+            return Err(format!(
+                "SCENE must be a .gltf or .glb file, got '{}'",
+                scene.display()
+            )
+            .into());
+        }
+        if !scene.is_file() {
+            return Err(format!("SCENE '{}': no such file", scene.display()).into());
+        }
+    }
+    if !is_ext(&args.output, "exr") {
+        return Err(format!(
+            "--output must name an .exr file, got '{}'",
+            args.output.display()
+        )
+        .into());
+    }
+    let dir = match args.output.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(format!(
+            "--output '{}': directory '{}' does not exist",
+            args.output.display(),
+            dir.display()
+        )
+        .into());
+    }
+    Ok(args.output.with_extension("png"))
+}
+
+/// Builds the session settings from validated flags.
+fn settings(args: &RenderArgs) -> RenderSettings {
+    let budget = match args.time {
+        Some(time) => Budget::Time(time),
+        None => Budget::SamplesPerPixel(args.spp.unwrap_or(DEFAULT_SPP)),
+    };
+    let threads = args.threads.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        usize::from,
+    );
+    RenderSettings {
+        width: args.width,
+        height: args.height,
+        integrator: args.integrator.kind,
+        budget,
+        threads,
+        seed: args.seed,
+        max_depth: args.max_depth,
+    }
+}
+
+/// Renders, writes the EXR and the PNG preview, prints a summary.
+pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
+    let png_path = check_paths(&args)?;
+    let settings = settings(&args);
+
+    let scene = match &args.scene {
+        None => Scene::cornell_box(settings.width, settings.height),
+        Some(path) => Scene::load(path)?,
+    };
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+
+    let progress = BarProgress::new("samples");
+    let bar = progress.handle();
+    if let Err(e) = ctrlc::set_handler(move || {
+        if CANCEL.swap(true, Ordering::SeqCst) {
+            eprintln!("\ninterrupted twice: aborting without writing an image");
+            std::process::exit(130);
+        }
+        bar.println(
+            "Ctrl-C: stopping; the image rendered so far will be written (Ctrl-C again to abort)",
+        );
+    }) {
+        eprintln!(
+            "warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will abort without writing"
+        );
+    }
+
+    let output = session::render(&scene, &settings, &progress, &CANCEL);
+    progress.finish();
+    let output = output?;
+    if output.cancelled {
+        eprintln!(
+            "interrupted: writing the partial image ({} samples, {:.2} per pixel)",
+            output.samples,
+            per_pixel(&output, &settings)
+        );
+    }
+    image_io::write_exr(&args.output, &output.image)?;
+    image_io::write_png(&png_path, &output.image, args.exposure)?;
+    print_summary(&args, &settings, &output, &png_path);
+    Ok(())
+}
+
+fn per_pixel(output: &RenderOutput, settings: &RenderSettings) -> f64 {
+    output.samples as f64 / (f64::from(settings.width) * f64::from(settings.height))
+}
+
+fn print_summary(args: &RenderArgs, settings: &RenderSettings, output: &RenderOutput, png: &Path) {
+    let secs = output.elapsed.as_secs_f64();
+    let rate = if secs > 0.0 {
+        output.samples as f64 / secs
+    } else {
+        0.0
+    };
+    let scene = args.scene.as_ref().map_or_else(
+        || "built-in Cornell box".to_string(),
+        |p| p.display().to_string(),
+    );
+    println!("scene       {scene}");
+    println!(
+        "integrator  {} ({}x{}, max depth {}, seed {}, {} threads)",
+        args.integrator.name,
+        settings.width,
+        settings.height,
+        settings.max_depth,
+        settings.seed,
+        settings.threads
+    );
+    println!(
+        "samples     {} ({:.2} per pixel){}",
+        output.samples,
+        per_pixel(output, settings),
+        if output.cancelled { ", cancelled" } else { "" }
+    );
+    println!("rate        {rate:.0} samples/s");
+    println!("non-finite  {} samples dropped", output.dropped_nonfinite);
+    println!("elapsed     {secs:.2} s");
+    println!("wrote       {}", args.output.display());
+    println!("wrote       {}", png.display());
+}

@@ -1,0 +1,221 @@
+//! End-to-end tests of the `chainlight` binary: flag validation, `compare`, and a tiny render.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use render::image::Image;
+use render::image_io::{read_exr, write_exr};
+
+fn chainlight(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_chainlight"))
+        .args(args)
+        .output()
+        .expect("the chainlight binary runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+/// A fresh directory for one test.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("chainlight-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn path_str(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Asserts a non-zero exit whose stderr contains every `needle`.
+fn assert_fails_with(args: &[&str], needles: &[&str]) {
+    let output = chainlight(args);
+    let err = stderr(&output);
+    assert!(
+        !output.status.success(),
+        "{args:?} succeeded; stderr: {err}"
+    );
+    for needle in needles {
+        assert!(
+            err.contains(needle),
+            "{args:?}: stderr lacks '{needle}':\n{err}"
+        );
+    }
+    assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
+}
+
+#[test]
+fn bad_flags_are_rejected_with_the_flag_named() {
+    assert_fails_with(&["render", "--width", "0"], &["--width", "1..=16384"]);
+    assert_fails_with(
+        &["render", "--height", "100000"],
+        &["--height", "1..=16384"],
+    );
+    assert_fails_with(
+        &["render", "--spp", "4", "--time", "1"],
+        &["--spp", "--time"],
+    );
+    assert_fails_with(&["render", "--spp", "0"], &["--spp"]);
+    assert_fails_with(&["render", "--time", "-3"], &["--time"]);
+    assert_fails_with(&["render", "--time", "nan"], &["--time"]);
+    assert_fails_with(&["render", "--threads", "0"], &["--threads"]);
+    assert_fails_with(&["render", "--exposure", "inf"], &["--exposure"]);
+    assert_fails_with(&["render", "--seed", "-1"], &["--seed"]);
+    assert_fails_with(&["render", "--integrator", "nope"], &["--integrator", "pt"]);
+    assert_fails_with(&["render", "-o", "out.png"], &["--output", ".exr"]);
+    assert_fails_with(
+        &["render", "-o", "/no/such/dir/out.exr"],
+        &["--output", "/no/such/dir"],
+    );
+    assert_fails_with(&["compare", "only-one.exr"], &["REFERENCE"]);
+}
+
+#[test]
+fn missing_and_malformed_scene_files_name_the_file() {
+    let dir = temp_dir("scenes");
+    let missing = dir.join("missing.gltf");
+    assert_fails_with(&["render", path_str(&missing)], &["missing.gltf"]);
+
+    let malformed = dir.join("broken.gltf");
+    std::fs::write(&malformed, b"{ \"asset\": { \"version\": ").unwrap();
+    let out = dir.join("out.exr");
+    assert_fails_with(
+        &["render", path_str(&malformed), "-o", path_str(&out)],
+        &["broken.gltf"],
+    );
+
+    let wrong_kind = dir.join("scene.obj");
+    std::fs::write(&wrong_kind, b"v 0 0 0").unwrap();
+    assert_fails_with(&["render", path_str(&wrong_kind)], &["scene.obj", ".gltf"]);
+}
+
+#[test]
+fn compare_prints_the_metrics() {
+    let dir = temp_dir("compare");
+    // Same hand-computed pair as the metrics unit tests:
+    // diffs (0, 1, 2) and (0, -0.5, -1); reference (1, 1, 1) and (0, 0.5, 1).
+    let image = Image::from_pixels(2, 1, vec![[1.0, 2.0, 3.0], [0.0, 0.0, 0.0]]).unwrap();
+    let reference = Image::from_pixels(2, 1, vec![[1.0, 1.0, 1.0], [0.0, 0.5, 1.0]]).unwrap();
+    let (a, r) = (dir.join("a.exr"), dir.join("ref.exr"));
+    write_exr(&a, &image).unwrap();
+    write_exr(&r, &reference).unwrap();
+
+    let output = chainlight(&["compare", path_str(&a), path_str(&r)]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    let value = |name: &str| -> f64 {
+        let line = text
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .unwrap_or_else(|| panic!("no {name} line in:\n{text}"));
+        line.split_whitespace().nth(1).unwrap().parse().unwrap()
+    };
+    let relmse = (6.0 / 1.01 + 0.25 / 0.26) / 6.0;
+    let expected = [
+        ("MSE", 6.25 / 6.0),
+        ("RMSE", 3.125f64.sqrt()),
+        ("relMSE", relmse),
+        ("rRMSE", relmse.sqrt()),
+        ("MAD", 4.5 / 6.0),
+    ];
+    for (name, want) in expected {
+        let got = value(name);
+        assert!((got - want).abs() <= 1e-6 * want, "{name}: {got} vs {want}");
+    }
+    let map = dir.join("a_error.png");
+    assert!(map.is_file(), "default error map not written:\n{text}");
+
+    let custom = dir.join("custom.png");
+    let output = chainlight(&[
+        "compare",
+        path_str(&a),
+        path_str(&r),
+        "--error-map",
+        path_str(&custom),
+        "--linear",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(custom.is_file());
+}
+
+#[test]
+fn compare_errors_name_the_files() {
+    let dir = temp_dir("compare-errors");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    write_exr(&a, &Image::new(2, 2)).unwrap();
+    write_exr(&b, &Image::new(3, 2)).unwrap();
+    assert_fails_with(
+        &["compare", path_str(&a), path_str(&b)],
+        &["2x2", "3x2", "a.exr"],
+    );
+
+    let missing = dir.join("missing.exr");
+    assert_fails_with(
+        &["compare", path_str(&a), path_str(&missing)],
+        &["missing.exr"],
+    );
+
+    let garbage = dir.join("garbage.exr");
+    std::fs::write(&garbage, b"not an exr").unwrap();
+    assert_fails_with(
+        &["compare", path_str(&garbage), path_str(&a)],
+        &["garbage.exr"],
+    );
+
+    assert_fails_with(
+        &[
+            "compare",
+            path_str(&a),
+            path_str(&a),
+            "--error-min",
+            "2",
+            "--error-max",
+            "1",
+        ],
+        &["--error-max"],
+    );
+}
+
+#[test]
+fn tiny_render_writes_exr_and_png() {
+    let dir = temp_dir("render");
+    let out = dir.join("tiny.exr");
+    let output = chainlight(&[
+        "render",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--spp",
+        "1",
+        "--threads",
+        "2",
+        "-o",
+        path_str(&out),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let image = read_exr(&out).unwrap();
+    assert_eq!((image.width, image.height), (16, 12));
+    assert!(image
+        .pixels
+        .iter()
+        .flatten()
+        .all(|c| c.is_finite() && *c >= 0.0));
+    assert!(
+        image.mean_luminance() > 0.0,
+        "the Cornell box should not be black"
+    );
+    let png = dir.join("tiny.png");
+    assert!(png.is_file());
+    let summary = stdout(&output);
+    assert!(
+        summary.contains("samples/s") && summary.contains("tiny.png"),
+        "{summary}"
+    );
+}
