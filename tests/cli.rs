@@ -219,3 +219,48 @@ fn tiny_render_writes_exr_and_png() {
         "{summary}"
     );
 }
+
+/// Ctrl-C (SIGINT) during a long render still writes the partial image and exits with 0.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_the_partial_image() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+
+    let dir = temp_dir("ctrl-c");
+    let out = dir.join("partial.exr");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_chainlight"))
+        .args([
+            "render",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--time",
+            "60",
+            "--threads",
+            "1",
+        ])
+        .args(["-o", path_str(&out)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The "rendering ..." line is printed after the Ctrl-C handler is installed.
+    let mut stderr_lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let first = stderr_lines.next().unwrap().unwrap();
+    assert!(first.starts_with("rendering"), "{first}");
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
+    let output = child.wait_with_output().unwrap();
+    assert!(output.status.success(), "{rest:?}");
+    assert!(rest.iter().any(|l| l.contains("partial image")), "{rest:?}");
+    assert!(stdout(&output).contains("cancelled"), "{}", stdout(&output));
+    let image = read_exr(&out).unwrap();
+    assert_eq!((image.width, image.height), (32, 32));
+    assert!(dir.join("partial.png").is_file());
+}

@@ -163,6 +163,18 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
         );
     }
 
+    let budget = match settings.budget {
+        Budget::SamplesPerPixel(spp) => format!("{spp} spp"),
+        Budget::Time(t) => format!("{:.1} s", t.as_secs_f64()),
+    };
+    eprintln!(
+        "rendering {} at {}x{} with {}, {budget}, {} threads (Ctrl-C writes the partial image)",
+        scene_name(&args),
+        settings.width,
+        settings.height,
+        args.integrator.name,
+        settings.threads
+    );
     let output = session::render(&scene, &settings, &progress, &CANCEL);
     progress.finish();
     let output = output?;
@@ -179,6 +191,13 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
     Ok(())
 }
 
+fn scene_name(args: &RenderArgs) -> String {
+    args.scene.as_ref().map_or_else(
+        || "the built-in Cornell box".to_string(),
+        |p| p.display().to_string(),
+    )
+}
+
 fn per_pixel(output: &RenderOutput, settings: &RenderSettings) -> f64 {
     output.samples as f64 / (f64::from(settings.width) * f64::from(settings.height))
 }
@@ -190,11 +209,7 @@ fn print_summary(args: &RenderArgs, settings: &RenderSettings, output: &RenderOu
     } else {
         0.0
     };
-    let scene = args.scene.as_ref().map_or_else(
-        || "built-in Cornell box".to_string(),
-        |p| p.display().to_string(),
-    );
-    println!("scene       {scene}");
+    println!("scene       {}", scene_name(args));
     println!(
         "integrator  {} ({}x{}, max depth {}, seed {}, {} threads)",
         args.integrator.name,
