@@ -5,8 +5,12 @@
 //! construction code runs under an independent sampler (PT, BDPT) and under primary-sample-space
 //! Markov chains (PSSMLT, MMLT, DRMLT, MALA).
 
+pub mod camera;
+pub mod frame;
 pub mod image;
 pub mod image_io;
+pub mod material;
 pub mod metrics;
 pub mod mlt;
 pub mod session;
+pub mod warp;
