@@ -5,12 +5,20 @@
 //! construction code runs under an independent sampler (PT, BDPT) and under primary-sample-space
 //! Markov chains (PSSMLT, MMLT, DRMLT, MALA).
 
+pub mod bdpt;
+pub mod bvh;
 pub mod camera;
+pub mod error;
+pub mod film;
 pub mod frame;
 pub mod image;
 pub mod image_io;
+pub mod integrator;
+pub mod light;
 pub mod material;
 pub mod metrics;
 pub mod mlt;
+pub mod sampler;
+pub mod scene;
 pub mod session;
 pub mod warp;
