@@ -171,7 +171,6 @@ fn bin_of(w: Vec3A) -> usize {
 fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, eps: f64) -> f64 {
     const MIN_DEPTH: u32 = 2;
     const MAX_DEPTH: u32 = 12;
-    #[allow(clippy::too_many_arguments)]
     fn rec(
         f: &dyn Fn(f64) -> f64,
         (a, b): (f64, f64),
