@@ -1,0 +1,48 @@
+//! Shared fixtures of the render integration tests.
+#![allow(dead_code, unreachable_pub)]
+
+use glam::{Vec2, Vec3, Vec3A};
+use render::scene::{CameraSpec, Material, Mesh, Scene};
+
+/// Emitted radiance of the analytic enclosure's walls.
+pub const ENCLOSURE_LE: f32 = 0.5;
+/// Albedo of the analytic enclosure's walls.
+pub const ENCLOSURE_ALBEDO: f32 = 0.6;
+
+/// The inside of a closed, flat-shaded sphere (a tessellated polyhedron: the closed form does
+/// not need a true sphere) whose walls are Lambertian with albedo `rho` and emit `Le` towards
+/// the inside. Radiance is uniform: with paths of at most `D` bounces it is
+/// `Le (1 - rho^(D+1)) / (1 - rho)` everywhere (the furnace argument: every reflection of a
+/// uniform radiance field of a Lambertian wall returns `rho` times it). Flat normals keep the
+/// shading frame equal to the geometry, so the closed form is exact.
+pub fn analytic_enclosure(width: u32, height: u32) -> Scene {
+    let mut smooth = Mesh::new();
+    smooth.add_sphere(Vec3A::ZERO, 1.0, 12, 24, 0, true);
+    let mut mesh = Mesh::new();
+    for tri in 0..smooth.triangle_count() {
+        let [a, b, c] = smooth.vertices(tri);
+        let n = (b - a).cross(c - a).normalize();
+        let i0 = mesh.add_vertex(a, n, Vec2::ZERO);
+        let i1 = mesh.add_vertex(b, n, Vec2::ZERO);
+        let i2 = mesh.add_vertex(c, n, Vec2::ZERO);
+        mesh.add_triangle([i0, i1, i2], 0);
+    }
+    let wall = Material::diffuse("wall", Vec3::splat(ENCLOSURE_ALBEDO), Vec3::splat(ENCLOSURE_LE));
+    let camera = CameraSpec::look_at(Vec3A::new(0.0, 0.0, 0.3), Vec3A::new(0.0, 0.1, -1.0), Vec3A::Y, 60.0);
+    Scene::new(mesh, vec![wall], vec![], camera, width, height)
+}
+
+/// The exact radiance of [`analytic_enclosure`] for paths of at most `max_depth` bounces.
+pub fn enclosure_radiance(max_depth: u32) -> f64 {
+    let rho = f64::from(ENCLOSURE_ALBEDO);
+    f64::from(ENCLOSURE_LE) * (1.0 - rho.powi(max_depth as i32 + 1)) / (1.0 - rho)
+}
+
+/// Mean and standard error of the per-pixel means of an image (channel 0), treating pixels as
+/// independent (true for independent samplers).
+pub fn mean_and_se(pixels: &[[f32; 3]]) -> (f64, f64) {
+    let n = pixels.len() as f64;
+    let mean = pixels.iter().map(|p| f64::from(p[0])).sum::<f64>() / n;
+    let var = pixels.iter().map(|p| (f64::from(p[0]) - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
