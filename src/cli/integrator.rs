@@ -16,11 +16,28 @@ pub(crate) struct IntegratorChoice {
 }
 
 /// Every integrator the CLI offers, in `--help` order. The first is the default.
-const INTEGRATORS: &[IntegratorChoice] = &[IntegratorChoice {
-    name: "pt",
-    kind: IntegratorKind::Pt,
-    help: "unidirectional path tracing with next-event estimation and MIS",
-}];
+const INTEGRATORS: &[IntegratorChoice] = &[
+    IntegratorChoice {
+        name: "pt",
+        kind: IntegratorKind::Pt,
+        help: "unidirectional path tracing with next-event estimation and MIS",
+    },
+    IntegratorChoice {
+        name: "bdpt",
+        kind: IntegratorKind::Bdpt,
+        help: "bidirectional path tracing, all strategies with MIS (the reference)",
+    },
+    IntegratorChoice {
+        name: "pssmlt",
+        kind: IntegratorKind::Pssmlt,
+        help: "primary-sample-space MLT over BDPT (Kelemen et al. 2002)",
+    },
+    IntegratorChoice {
+        name: "mmlt",
+        kind: IntegratorKind::Mmlt,
+        help: "multiplexed MLT: one BDPT strategy per sample (Hachisuka et al. 2014)",
+    },
+];
 
 impl ValueEnum for IntegratorChoice {
     fn value_variants<'a>() -> &'a [Self] {

@@ -21,6 +21,22 @@ pub(crate) fn seconds(text: &str) -> Result<Duration, String> {
 }
 
 /// Parses `--exposure` stops: a finite number in [-64, 64].
+/// `--large-step`: `auto` or a probability in 0..=1.
+pub(crate) fn large_step(text: &str) -> Result<render::mlt::LargeStepMode, String> {
+    if text.eq_ignore_ascii_case("auto") {
+        return Ok(render::mlt::LargeStepMode::Auto {
+            initial: 0.5,
+            estimation_steps: 1_000,
+        });
+    }
+    match text.parse::<f64>() {
+        Ok(p) if (0.0..=1.0).contains(&p) => Ok(render::mlt::LargeStepMode::Fixed(p)),
+        _ => Err(format!(
+            "expected `auto` or a probability in 0..=1, got '{text}'"
+        )),
+    }
+}
+
 pub(crate) fn stops(text: &str) -> Result<f32, String> {
     let value: f32 = text
         .trim()

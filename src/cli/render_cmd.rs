@@ -6,8 +6,9 @@ use std::time::Duration;
 
 use clap::Args;
 use render::image_io;
+use render::mlt::LargeStepMode;
 use render::scene::Scene;
-use render::session::{self, Budget, RenderOutput, RenderSettings};
+use render::session::{self, Budget, McmcSettings, RenderOutput, RenderSettings};
 
 use super::integrator::IntegratorChoice;
 use super::progress::BarProgress;
@@ -33,7 +34,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_enum, default_value = "pt")]
     integrator: IntegratorChoice,
     /// Samples per pixel (for MCMC integrators: mutations per pixel) [default: 16].
-    #[arg(long, allow_negative_numbers = true, value_name = "N", conflicts_with = "time",
+    #[arg(long, visible_alias = "mutations-per-pixel", allow_negative_numbers = true, value_name = "N", conflicts_with = "time",
           value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     spp: Option<u32>,
     /// Render for this many seconds instead of a fixed sample count (not bit-reproducible).
@@ -65,6 +66,23 @@ pub(crate) struct RenderArgs {
     /// Output OpenEXR file; a tonemapped PNG preview is written next to it (same stem, .png).
     #[arg(short, long, value_name = "OUT.exr", default_value = "chainlight.exr")]
     output: PathBuf,
+    /// MCMC integrators: the large-step probability, `auto` (Zsolnai & Szirmay-Kalos 2013:
+    /// estimated from the first mutations of every chain) or a number in 0..=1.
+    #[arg(long, value_name = "auto|P", default_value = "0.3", value_parser = parse::large_step)]
+    large_step: LargeStepMode,
+    /// MCMC integrators: number of Markov chains, 1..=1000000.
+    #[arg(long, value_name = "N", default_value_t = 256,
+          value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    chains: u32,
+    /// MCMC integrators: independent samples in the bootstrap that estimates the
+    /// normalisation and seeds the chains, 1..=100000000.
+    #[arg(long, value_name = "N", default_value_t = 100_000,
+          value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
+    bootstrap_samples: u32,
+    /// BDPT only: also write the MIS-weighted image of every strategy (s, t) next to the
+    /// output, as `<stem>_s<S>_t<T>.exr`.
+    #[arg(long)]
+    strategy_images: bool,
     /// Exposure of the PNG preview in stops, -64..=64 (the EXR is never scaled).
     #[arg(long, allow_negative_numbers = true, value_name = "STOPS", default_value = "0", value_parser = parse::stops)]
     exposure: f32,
@@ -131,6 +149,19 @@ fn settings(args: &RenderArgs) -> RenderSettings {
         threads,
         seed: args.seed,
         max_depth: args.max_depth,
+        mcmc: McmcSettings {
+            large_step: match args.large_step {
+                LargeStepMode::Auto { initial, .. } => LargeStepMode::Auto {
+                    initial,
+                    estimation_steps: session::AUTO_LARGE_STEP_ESTIMATION,
+                },
+                fixed => fixed,
+            },
+            chains: args.chains as usize,
+            bootstrap_samples: args.bootstrap_samples as usize,
+            ..McmcSettings::default()
+        },
+        strategy_images: args.strategy_images,
     }
 }
 
@@ -178,6 +209,25 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
     let output = session::render(&scene, &settings, &progress, &CANCEL);
     progress.finish();
     let output = output?;
+    for note in &output.notes {
+        eprintln!("note: {note}");
+    }
+    if args.strategy_images
+        && !settings
+            .integrator
+            .eq(&render::session::IntegratorKind::Bdpt)
+    {
+        eprintln!("warning: --strategy-images applies to --integrator bdpt only; ignored");
+    }
+    for ((s, t), img) in &output.strategy_images {
+        let stem = args
+            .output
+            .file_stem()
+            .map_or_else(|| "chainlight".into(), |x| x.to_string_lossy().into_owned());
+        let path = args.output.with_file_name(format!("{stem}_s{s}_t{t}.exr"));
+        image_io::write_exr(&path, img)?;
+        println!("wrote       {}", path.display());
+    }
     if output.cancelled {
         eprintln!(
             "interrupted: writing the partial image ({} samples, {:.2} per pixel)",

@@ -9,12 +9,18 @@ use std::time::{Duration, Instant};
 use glam::UVec2;
 use rayon::prelude::*;
 
+use crate::bdpt::{self, BdptParams};
 use crate::error::RenderError;
 use crate::film::{tiles, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
 use crate::integrator::pt;
+use crate::mlt::{
+    self, LargeStepMode, MltBudget, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS,
+};
 use crate::sampler::IndependentSampler;
 use crate::scene::Scene;
+use mcmc_core::Mh;
+use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 
 /// Which light-transport algorithm renders the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -23,7 +29,51 @@ pub enum IntegratorKind {
     /// Unidirectional path tracing with next-event estimation and MIS.
     #[default]
     Pt,
+    /// Bidirectional path tracing with MIS over all strategies (the reference renderer).
+    Bdpt,
+    /// Primary-sample-space MLT over BDPT (Kelemen et al. 2002): all strategies per sample.
+    Pssmlt,
+    /// Multiplexed MLT (Hachisuka et al. 2014): one BDPT strategy per sample, path length
+    /// chosen per chain.
+    Mmlt,
 }
+
+impl IntegratorKind {
+    /// True for the Markov chain integrators (budget in mutations per pixel).
+    #[must_use]
+    pub const fn is_mcmc(self) -> bool {
+        matches!(self, IntegratorKind::Pssmlt | IntegratorKind::Mmlt)
+    }
+}
+
+/// Settings of the Markov chain integrators (ignored by PT and BDPT).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct McmcSettings {
+    /// Large-step probability: fixed, or automatic (Zsolnai & Szirmay-Kalos 2013).
+    /// Default: fixed 0.3 (pbrt-v3's and DRMLT's value).
+    pub large_step: LargeStepMode,
+    /// Number of Markov chains (default 256).
+    pub chains: usize,
+    /// Independent samples in the bootstrap that estimates `b` and seeds the chains
+    /// (default 100 000).
+    pub bootstrap_samples: usize,
+    /// The small-step kernel (default Kelemen with s1 = 1/1024, s2 = 1/64).
+    pub small_step: SmallMutation,
+}
+
+impl Default for McmcSettings {
+    fn default() -> Self {
+        Self {
+            large_step: LargeStepMode::Fixed(0.3),
+            chains: 256,
+            bootstrap_samples: 100_000,
+            small_step: SmallMutation::Kelemen(KelemenParams::kelemen2002()),
+        }
+    }
+}
+
+/// Default mutations per chain in the estimation phase of automatic large-step control.
+pub const AUTO_LARGE_STEP_ESTIMATION: u64 = 1_000;
 
 /// How long to render: a sample count per pixel or a wall-clock budget.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,6 +101,27 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Maximum path depth (number of bounces).
     pub max_depth: u32,
+    /// Settings of the MCMC integrators.
+    pub mcmc: McmcSettings,
+    /// BDPT only: also return the MIS-weighted image of every strategy `(s, t)`.
+    pub strategy_images: bool,
+}
+
+impl Default for RenderSettings {
+    /// 256 x 256, PT, 16 samples per pixel, 1 thread, seed 0, max depth 5.
+    fn default() -> Self {
+        Self {
+            width: 256,
+            height: 256,
+            integrator: IntegratorKind::Pt,
+            budget: Budget::SamplesPerPixel(16),
+            threads: 1,
+            seed: 0,
+            max_depth: 5,
+            mcmc: McmcSettings::default(),
+            strategy_images: false,
+        }
+    }
 }
 
 /// Receives progress reports from a running render (e.g. an indicatif bar).
@@ -83,6 +154,11 @@ pub struct RenderOutput {
     pub cancelled: bool,
     /// Wall-clock time spent.
     pub elapsed: Duration,
+    /// Human-readable notes about the run (e.g. the bootstrap's `b`, the automatic
+    /// large-step statistics, or why an image is black).
+    pub notes: Vec<String>,
+    /// BDPT with `strategy_images`: the MIS-weighted image of each strategy `(s, t)`.
+    pub strategy_images: Vec<((u8, u8), Image)>,
 }
 
 /// Edge length of the square tiles that are the work units of a render (and its merge order).
@@ -167,11 +243,6 @@ pub fn render(
 ) -> Result<RenderOutput, RenderError> {
     let start = Instant::now();
     validate(settings)?;
-    #[allow(unreachable_patterns)]
-    match settings.integrator {
-        IntegratorKind::Pt => {}
-        other => return Err(RenderError::UnsupportedIntegrator(format!("{other:?}"))),
-    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
         .build()
@@ -179,6 +250,136 @@ pub fn render(
             threads: settings.threads,
             reason: e.to_string(),
         })?;
+    match settings.integrator {
+        IntegratorKind::Pt => render_pt(scene, settings, &pool, start, progress, cancel),
+        IntegratorKind::Bdpt | IntegratorKind::Pssmlt | IntegratorKind::Mmlt => {
+            // BDPT and the MCMC targets use the scene's camera: set it to the image size.
+            let mut sized;
+            let scene = if (scene.camera().width(), scene.camera().height())
+                == (settings.width, settings.height)
+            {
+                scene
+            } else {
+                sized = scene.clone();
+                sized.set_resolution(settings.width, settings.height);
+                &sized
+            };
+            let out =
+                pool.install(|| render_bidirectional(scene, settings, start, progress, cancel));
+            Ok(out)
+        }
+    }
+}
+
+/// BDPT, PSSMLT and MMLT.
+fn render_bidirectional(
+    scene: &Scene,
+    settings: &RenderSettings,
+    start: Instant,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> RenderOutput {
+    let params = BdptParams {
+        max_depth: settings.max_depth,
+        ..BdptParams::default()
+    };
+    let (w, h) = (settings.width, settings.height);
+    let mut notes = Vec::new();
+    if scene.lights().is_empty() {
+        notes.push("the scene has no emitters: the image is black".to_owned());
+    }
+    if settings.integrator == IntegratorKind::Bdpt {
+        let (spp, time) = match settings.budget {
+            Budget::SamplesPerPixel(n) => (Some(n), None),
+            Budget::Time(t) => (None, Some(t)),
+        };
+        let out = bdpt::render_bdpt(
+            scene,
+            &params,
+            spp,
+            time,
+            settings.seed,
+            settings.strategy_images,
+            progress,
+            cancel,
+        );
+        return RenderOutput {
+            samples: u64::from(out.spp) * u64::from(w) * u64::from(h),
+            image: out.image,
+            dropped_nonfinite: out.dropped,
+            cancelled: out.cancelled,
+            elapsed: start.elapsed(),
+            notes,
+            strategy_images: out.strategy_images,
+        };
+    }
+    let m = &settings.mcmc;
+    let mlt_settings = MltSettings {
+        width: w as usize,
+        height: h as usize,
+        chains: m.chains,
+        bootstrap_samples: m.bootstrap_samples,
+        budget: match settings.budget {
+            Budget::SamplesPerPixel(n) => MltBudget::MutationsPerPixel(f64::from(n)),
+            Budget::Time(t) => MltBudget::Time(t),
+        },
+        large_step: m.large_step,
+        seed: settings.seed,
+        streams: PATH_STREAMS,
+    };
+    let small = SmallStep::new(m.small_step);
+    let kernel = |p: f64| {
+        Mh::new(
+            PssmltProposal::new(small, p.clamp(0.0, 1.0))
+                .unwrap_or_else(|_| unreachable!("clamped")),
+        )
+    };
+    let out = if settings.integrator == IntegratorKind::Mmlt {
+        let targets = MmltTarget::all_depths(scene, params, w, h);
+        mlt::render_mlt(&targets, kernel, &mlt_settings, progress, cancel)
+    } else {
+        let targets = [PssmltTarget::new(scene, params, w, h)];
+        mlt::render_mlt(&targets, kernel, &mlt_settings, progress, cancel)
+    };
+    if let Some(msg) = &out.message {
+        notes.push(msg.clone());
+    } else {
+        notes.push(format!(
+            "bootstrap: b = {:.6} from {} samples",
+            out.b, m.bootstrap_samples
+        ));
+        notes.push(format!(
+            "acceptance rate {:.3} over {} mutations",
+            out.stats.acceptance_rate(),
+            out.mutations
+        ));
+    }
+    if let Some(e) = out.large_step {
+        notes.push(format!(
+            "automatic large-step control: eta_s = {:.4}, eta_l = {:.4}, eta_0 = {:.4} ({} small, {} large steps) -> p_large = {:.4}",
+            e.eta_s, e.eta_l, e.eta_0, e.small_steps, e.large_steps, e.large_step_probability
+        ));
+    }
+    RenderOutput {
+        image: out.image,
+        samples: out.mutations,
+        dropped_nonfinite: out.dropped + out.non_finite,
+        cancelled: out.cancelled,
+        elapsed: start.elapsed(),
+        notes,
+        strategy_images: Vec::new(),
+    }
+}
+
+/// Unidirectional path tracing over fixed tiles.
+fn render_pt(
+    scene: &Scene,
+    settings: &RenderSettings,
+    pool: &rayon::ThreadPool,
+    start: Instant,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> Result<RenderOutput, RenderError> {
     let (w, h) = (settings.width, settings.height);
     let camera = scene.camera_spec().build(w, h);
     let mut film = Film::new(w as usize, h as usize, Filter::BOX);
@@ -272,6 +473,8 @@ pub fn render(
         dropped_nonfinite: film.nonfinite,
         cancelled,
         elapsed: start.elapsed(),
+        notes: Vec::new(),
+        strategy_images: Vec::new(),
     })
 }
 
@@ -290,6 +493,7 @@ pub fn render_cornell_box(size: u32, spp: u32, seed: u64) -> Result<Image, Rende
         threads: 1,
         seed,
         max_depth: 5,
+        ..RenderSettings::default()
     };
     Ok(render(&scene, &settings, &NoProgress, &AtomicBool::new(false))?.image)
 }
@@ -307,6 +511,7 @@ mod tests {
             threads: 1,
             seed: 0,
             max_depth: 3,
+            ..RenderSettings::default()
         }
     }
 

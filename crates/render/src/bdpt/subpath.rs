@@ -49,10 +49,7 @@ pub fn random_walk<S: Sampler + ?Sized>(
     }
     let mut pdf_fwd = pdf_dir;
     let mut added = 0;
-    loop {
-        let Some(hit) = scene_api::intersect(scene, &ray) else {
-            break;
-        };
+    while let Some(hit) = scene_api::intersect(scene, &ray) {
         let idx = origin + 1 + added;
         let prev = path[idx - 1];
         let mut v = Vertex {

@@ -55,7 +55,7 @@ impl Bootstrap {
     /// True if no bootstrap sample carried light.
     #[must_use]
     pub fn found_nothing(&self) -> bool {
-        !(self.b > 0.0)
+        self.b.is_nan() || self.b <= 0.0
     }
 
     /// Systematic resampling (Veach's thesis, p. 340; Kitagawa 1996): `count` sample indices
@@ -64,7 +64,7 @@ impl Bootstrap {
     #[must_use]
     pub fn resample(&self, count: usize, u: f64) -> Vec<usize> {
         let total: f64 = self.weights.iter().sum();
-        if !(total > 0.0) || count == 0 {
+        if total.is_nan() || total <= 0.0 || count == 0 {
             return Vec::new();
         }
         let step = total / count as f64;

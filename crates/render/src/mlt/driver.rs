@@ -24,8 +24,9 @@ pub enum LargeStepMode {
     /// A fixed probability in `[0, 1]`.
     Fixed(f64),
     /// Automatic control (Zsolnai & Szirmay-Kalos 2013): every chain first runs
-    /// `estimation_steps` mutations with `initial` large-step probability; `eta_s`, `eta_l`,
-    /// `eta_0` are pooled over all chains and `p_l` is set for the rest of the render.
+    /// `estimation_steps` mutations (at most a tenth of its budget) with `initial`
+    /// large-step probability; `eta_s`, `eta_l`, `eta_0` are pooled over all chains and `p_l`
+    /// is set for the rest of the render (finite adaptation: the kernel is fixed afterwards).
     Auto {
         /// Large-step probability during the estimation phase.
         initial: f64,

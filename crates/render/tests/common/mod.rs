@@ -27,8 +27,17 @@ pub fn analytic_enclosure(width: u32, height: u32) -> Scene {
         let i2 = mesh.add_vertex(c, n, Vec2::ZERO);
         mesh.add_triangle([i0, i1, i2], 0);
     }
-    let wall = Material::diffuse("wall", Vec3::splat(ENCLOSURE_ALBEDO), Vec3::splat(ENCLOSURE_LE));
-    let camera = CameraSpec::look_at(Vec3A::new(0.0, 0.0, 0.3), Vec3A::new(0.0, 0.1, -1.0), Vec3A::Y, 60.0);
+    let wall = Material::diffuse(
+        "wall",
+        Vec3::splat(ENCLOSURE_ALBEDO),
+        Vec3::splat(ENCLOSURE_LE),
+    );
+    let camera = CameraSpec::look_at(
+        Vec3A::new(0.0, 0.0, 0.3),
+        Vec3A::new(0.0, 0.1, -1.0),
+        Vec3A::Y,
+        60.0,
+    );
     Scene::new(mesh, vec![wall], vec![], camera, width, height)
 }
 
@@ -43,6 +52,10 @@ pub fn enclosure_radiance(max_depth: u32) -> f64 {
 pub fn mean_and_se(pixels: &[[f32; 3]]) -> (f64, f64) {
     let n = pixels.len() as f64;
     let mean = pixels.iter().map(|p| f64::from(p[0])).sum::<f64>() / n;
-    let var = pixels.iter().map(|p| (f64::from(p[0]) - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let var = pixels
+        .iter()
+        .map(|p| (f64::from(p[0]) - mean).powi(2))
+        .sum::<f64>()
+        / (n - 1.0);
     (mean, (var / n).sqrt())
 }
