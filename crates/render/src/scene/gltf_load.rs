@@ -251,6 +251,7 @@ impl Loader<'_> {
         };
         let root: gltf::json::Root = gltf::json::deserialize::from_slice(json_bytes)
             .map_err(|e| self.err(format!("malformed JSON: {e}")))?;
+        self.precheck(&root)?;
         let doc = gltf::Document::from_json(root).map_err(|e| self.err(e.to_string()))?;
         // Raw JSON for node extras (thin lens, motion blur), which gltf-json drops.
         let raw: gltf::json::Value =
@@ -310,6 +311,27 @@ impl Loader<'_> {
         warnings.append(&mut scene.warnings);
         scene.warnings = warnings;
         Ok(scene)
+    }
+
+    /// Checks what gltf-json 1.4.1's validation indexes without a bounds check (it panics on
+    /// an out-of-range `POSITION` accessor index).
+    fn precheck(&self, root: &gltf::json::Root) -> Result<(), RenderError> {
+        use gltf::json::mesh::Semantic as JsonSemantic;
+        use gltf::json::validation::Checked;
+        for (mi, m) in root.meshes.iter().enumerate() {
+            for (pi, p) in m.primitives.iter().enumerate() {
+                if let Some(index) = p.attributes.get(&Checked::Valid(JsonSemantic::Positions)) {
+                    if index.value() >= root.accessors.len() {
+                        return Err(self.err(format!(
+                            "meshes[{mi}].primitives[{pi}].attributes.POSITION: accessor {} out of range ({} accessors)",
+                            index.value(),
+                            root.accessors.len()
+                        )));
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Warns about features the renderer ignores.
