@@ -1,0 +1,136 @@
+//! Throughput of the bidirectional integrators on `scenes/cornell-glass.gltf` (64x64, max
+//! depth 5, one thread): BDPT samples/s, PSSMLT and MMLT mutations/s, and the cost of the MCMC
+//! bookkeeping alone (MH on a PSS target that reads 20 numbers and traces nothing).
+//!
+//! `cargo bench -p render --bench mlt` (add `-- --quick` for a short run).
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use glam::Vec2;
+use mcmc_core::{Chain, Mh, NoAdaptation, Target};
+use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
+use rand::SeedableRng;
+use render::bdpt::{self, BdptParams, BdptScratch};
+use render::mlt::{
+    bootstrap_key, Bootstrap, MmltTarget, PssmltTarget, SplatBuffer, SplatObserver, PATH_STREAMS,
+};
+use render::sampler::{IndependentSampler, Sampler};
+use render::scene::Scene;
+
+const SIZE: u32 = 64;
+const STEPS: u64 = 1_000;
+
+fn scene() -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-glass.gltf");
+    let mut s = Scene::load(&path).unwrap_or_else(|_| Scene::cornell_box(SIZE, SIZE));
+    s.set_resolution(SIZE, SIZE);
+    s
+}
+
+fn kernel() -> Mh<PssmltProposal> {
+    let small = SmallStep::new(SmallMutation::Kelemen(KelemenParams::kelemen2002()));
+    Mh::new(PssmltProposal::new(small, 0.3).expect("valid p"))
+}
+
+/// Steps a chain started from a bootstrap sample of `target` chosen by luminance.
+fn bench_chain<T>(c: &mut Criterion, name: &str, target: &T)
+where
+    T: Target<State = PssState, Payload = render::mlt::PathPayload>,
+{
+    let bs = Bootstrap::run(target, PATH_STREAMS, 2_000, 1);
+    let start = bs.resample(1, 0.5).first().copied().unwrap_or(0);
+    let state = PssState::new(PATH_STREAMS, bootstrap_key(1, start as u64));
+    let rng = rand_pcg::Pcg64::seed_from_u64(3);
+    let Ok(mut chain) = Chain::new(target, kernel(), NoAdaptation, rng, state) else {
+        return;
+    };
+    let mut buffer = SplatBuffer::new(SIZE as usize, SIZE as usize);
+    let mut group = c.benchmark_group("mutations_cornell_glass");
+    group.throughput(Throughput::Elements(STEPS));
+    group.bench_function(name, |b| {
+        b.iter(|| {
+            let mut obs = SplatObserver {
+                buffer: &mut buffer,
+                dropped: 0,
+            };
+            for _ in 0..STEPS {
+                let _ = chain.step(&mut obs);
+            }
+        })
+    });
+    group.finish();
+}
+
+fn integrators(c: &mut Criterion) {
+    let scene = scene();
+    let params = BdptParams::default();
+
+    let mut group = c.benchmark_group("bdpt_cornell_glass");
+    group.throughput(Throughput::Elements(u64::from(SIZE * SIZE)));
+    let mut pass = 0u64;
+    let mut scratch = BdptScratch::default();
+    group.bench_function("samples_1_thread", |b| {
+        let mut sampler = IndependentSampler::new(1);
+        b.iter(|| {
+            pass += 1;
+            let mut sum = 0.0f32;
+            for y in 0..SIZE {
+                for x in 0..SIZE {
+                    sampler.start_pixel_sample(u64::from(y * SIZE + x), pass);
+                    let p = Vec2::new(x as f32, y as f32) + sampler.next_2d();
+                    bdpt::sample(&scene, &mut sampler, p, &params, true, &mut scratch, |sp| {
+                        sum += sp.l.x
+                    });
+                }
+            }
+            black_box(sum)
+        })
+    });
+    group.finish();
+
+    bench_chain(
+        c,
+        "pssmlt_1_thread",
+        &PssmltTarget::new(&scene, params, SIZE, SIZE),
+    );
+    // MMLT: the chain of depth 2 (most of the image's light in this scene is 1-2 bounces).
+    let mmlt = MmltTarget::all_depths(&scene, params, SIZE, SIZE);
+    bench_chain(c, "mmlt_depth2_1_thread", &mmlt[2]);
+}
+
+/// A PSS target that reads 20 numbers and returns a smooth density: MCMC bookkeeping only.
+struct Cheap;
+
+impl Target for Cheap {
+    type State = PssState;
+    type Payload = ();
+    fn evaluate(&self, x: &mut PssState, _: &mut ()) -> f64 {
+        x.begin();
+        let mut s = 0.0;
+        for _ in 0..20 {
+            s += x.next_sample();
+        }
+        -(s - 10.0).powi(2)
+    }
+}
+
+fn bookkeeping(c: &mut Criterion) {
+    let rng = rand_pcg::Pcg64::seed_from_u64(5);
+    let mut chain =
+        Chain::new(&Cheap, kernel(), NoAdaptation, rng, PssState::new(1, 9)).expect("start");
+    let mut group = c.benchmark_group("mcmc_bookkeeping");
+    group.throughput(Throughput::Elements(STEPS));
+    group.bench_function("mh_pss_20_dims", |b| {
+        b.iter(|| {
+            for _ in 0..STEPS {
+                let _ = chain.step(&mut ());
+            }
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, integrators, bookkeeping);
+criterion_main!(benches);
