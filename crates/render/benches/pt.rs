@@ -51,7 +51,13 @@ fn pt_cornell(c: &mut Criterion) {
     };
     let cancel = AtomicBool::new(false);
     group.bench_function("render_session_2_threads", |b| {
-        b.iter(|| black_box(render(&scene, &settings, &NoProgress, &cancel).unwrap().samples))
+        b.iter(|| {
+            black_box(
+                render(&scene, &settings, &NoProgress, &cancel)
+                    .unwrap()
+                    .samples,
+            )
+        })
     });
     group.finish();
 }

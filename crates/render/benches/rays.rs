@@ -46,7 +46,14 @@ fn rays(c: &mut Criterion) {
         })
         .collect();
     // Primary: a 316 x 316 pinhole camera at distance 3 (about 60% of the rays hit).
-    let cam = Camera::perspective(Vec3A::new(0.0, 0.0, 3.0), Vec3A::ZERO, Vec3A::Y, 50.0, 316, 316);
+    let cam = Camera::perspective(
+        Vec3A::new(0.0, 0.0, 3.0),
+        Vec3A::ZERO,
+        Vec3A::Y,
+        50.0,
+        316,
+        316,
+    );
     let primary: Vec<(Vec3A, Vec3A)> = (0..RAYS)
         .map(|i| {
             let p = Vec2::new((i % 316) as f32 + 0.5, (i / 316) as f32 + 0.5);

@@ -64,7 +64,7 @@ fn glb_parts(bytes: &[u8]) -> Option<(Vec<u8>, Vec<u8>)> {
 
 fn glb_pack(json: &[u8], bin: &[u8]) -> Vec<u8> {
     let mut json = json.to_vec();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
