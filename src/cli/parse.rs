@@ -37,6 +37,19 @@ pub(crate) fn large_step(text: &str) -> Result<render::mlt::LargeStepMode, Strin
     }
 }
 
+/// `--small-step`: `kelemen` or `gaussian=SIGMA`.
+pub(crate) fn small_step(text: &str) -> Result<pss::SmallMutation, String> {
+    if text.eq_ignore_ascii_case("kelemen") {
+        return pss::SmallMutation::kelemen(pss::KelemenParams::kelemen2002())
+            .map_err(|e| e.to_string());
+    }
+    let sigma = text
+        .strip_prefix("gaussian=")
+        .and_then(|v| v.parse::<f64>().ok())
+        .ok_or_else(|| format!("expected `kelemen` or `gaussian=SIGMA`, got '{text}'"))?;
+    pss::SmallMutation::gaussian(sigma).map_err(|e| e.to_string())
+}
+
 pub(crate) fn stops(text: &str) -> Result<f32, String> {
     let value: f32 = text
         .trim()

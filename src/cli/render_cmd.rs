@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use clap::Args;
+use pss::SmallMutation;
 use render::image_io;
 use render::mlt::LargeStepMode;
 use render::scene::Scene;
@@ -70,6 +71,10 @@ pub(crate) struct RenderArgs {
     /// estimated from the first mutations of every chain) or a number in 0..=1.
     #[arg(long, value_name = "auto|P", default_value = "0.3", value_parser = parse::large_step)]
     large_step: LargeStepMode,
+    /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
+    /// al. 2002) or `gaussian=SIGMA` with SIGMA in (0, 10] (pbrt-v3 uses gaussian=0.01).
+    #[arg(long, value_name = "kelemen|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]
+    small_step: SmallMutation,
     /// MCMC integrators: number of Markov chains, 1..=1000000.
     #[arg(long, value_name = "N", default_value_t = 256,
           value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
@@ -159,7 +164,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             },
             chains: args.chains as usize,
             bootstrap_samples: args.bootstrap_samples as usize,
-            ..McmcSettings::default()
+            small_step: args.small_step,
         },
         strategy_images: args.strategy_images,
     }
