@@ -539,6 +539,67 @@ mod tests {
     }
 
     #[test]
+    fn cancel_mid_render_returns_the_partial_image() {
+        /// Cancels after `after` progress reports.
+        struct CancelAfter<'a> {
+            flag: &'a AtomicBool,
+            after: u64,
+            seen: std::sync::atomic::AtomicU64,
+        }
+        impl Progress for CancelAfter<'_> {
+            fn set_total(&self, _: u64) {}
+            fn advance(&self, _: u64) {
+                if self.seen.fetch_add(1, Ordering::Relaxed) + 1 >= self.after {
+                    self.flag.store(true, Ordering::Relaxed);
+                }
+            }
+        }
+        let scene = Scene::cornell_box(48, 48);
+        let mut s = settings();
+        (s.width, s.height, s.threads) = (48, 48, 2);
+        s.budget = Budget::SamplesPerPixel(64);
+        let full = render(&scene, &s, &NoProgress, &AtomicBool::new(false)).unwrap();
+        let flag = AtomicBool::new(false);
+        let progress = CancelAfter {
+            flag: &flag,
+            after: 12,
+            seen: Default::default(),
+        };
+        let out = render(&scene, &s, &progress, &flag).unwrap();
+        assert!(out.cancelled);
+        assert!(
+            out.samples > 0 && out.samples < full.samples,
+            "{}",
+            out.samples
+        );
+        // Every pixel is normalised by its own samples: the partial image has the full
+        // image's brightness where it was rendered (loosely: fewer samples, more noise).
+        let lit = out.image.pixels.iter().filter(|p| p[0] > 0.0).count();
+        assert!(lit > 0);
+        let partial_mean: f64 = out
+            .image
+            .pixels
+            .iter()
+            .map(|p| f64::from(p[0]))
+            .sum::<f64>()
+            / lit as f64;
+        let full_lit: Vec<f64> = full
+            .image
+            .pixels
+            .iter()
+            .zip(&out.image.pixels)
+            .filter(|(_, q)| q[0] > 0.0)
+            .map(|(p, _)| f64::from(p[0]))
+            .collect();
+        let full_mean = full_lit.iter().sum::<f64>() / full_lit.len() as f64;
+        assert!(
+            (partial_mean - full_mean).abs() < 0.25 * full_mean,
+            "{partial_mean} vs {full_mean}"
+        );
+        assert_eq!(out.image.count_nonfinite(), 0);
+    }
+
+    #[test]
     fn cancelled_before_start_gives_black_cancelled_image() {
         let scene = Scene::cornell_box(8, 8);
         let out = render(&scene, &settings(), &NoProgress, &AtomicBool::new(true)).unwrap();
