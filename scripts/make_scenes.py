@@ -801,7 +801,7 @@ def scene_dof():
     h = 1.0
     s.mesh("light", quad((-h, 3.5, -1 - h), (h, 3.5, -1 - h), (h, 3.5, -1 + h), (-h, 3.5, -1 + h),
                          facing=(0, -1, 0)), "light")
-    s.camera(eye, target, 32.0, extras={"aperture_radius": 0.06, "focus_distance": jf(focus)})
+    s.camera(eye, target, 32.0, extras={"aperture_radius": 0.08, "focus_distance": jf(focus)})
     return s
 
 
