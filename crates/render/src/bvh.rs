@@ -110,7 +110,7 @@ impl Bvh {
         if !(origin.is_finite() && dir.is_finite()) || dir == Vec3A::ZERO || t_max.is_nan() {
             return None;
         }
-        let ray = BvhRay::new(origin, positive_zeros(dir), 0.0, t_max);
+        let ray = backed_off_ray(origin, dir, t_max);
         let mut hit = RayHit::none();
         if !bvh.ray_traverse(ray, &mut hit, |r, id| self.tris[id].intersect(r)) {
             return None;
@@ -118,7 +118,7 @@ impl Bvh {
         let slot = hit.primitive_id as usize;
         let tri = &self.tris[slot];
         Some(Hit {
-            t: hit.t,
+            t: (hit.t - BACKOFF).max(0.0),
             triangle: self.tri_ids[slot],
             barycentrics: barycentrics(tri, origin, dir),
         })
@@ -135,9 +135,27 @@ impl Bvh {
         if !(origin.is_finite() && dir.is_finite()) || dir == Vec3A::ZERO || t_max.is_nan() {
             return true;
         }
-        let ray = BvhRay::new(origin, positive_zeros(dir), 0.0, t_max);
+        let ray = backed_off_ray(origin, dir, t_max);
         !bvh.ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r))
     }
+}
+
+/// How far (in units of `t`) a query ray starts behind its true origin.
+///
+/// obvhs 0.4's CWBVH traversal clamps node entry distances to at least `1e-4`
+/// (`cwbvh/node.rs`, `EPSILON`), so a triangle closer than that to the ray origin is never
+/// tested: rays leaving a point near an inside corner passed through the neighbouring wall
+/// (found by `tests/mlt_convergence.rs`: light leaking out of a closed box). Starting the ray
+/// `BACKOFF > 1e-4` behind the origin with `tmin = BACKOFF` makes the clamp land before the
+/// true origin; the triangle test's `t >= tmin` still rejects anything behind it.
+const BACKOFF: f32 = 2.5e-4;
+
+/// The obvhs ray for the segment `origin + t dir`, `0 <= t <= t_max`, started [`BACKOFF`]
+/// behind `origin`.
+#[inline]
+fn backed_off_ray(origin: Vec3A, dir: Vec3A, t_max: f32) -> BvhRay {
+    let dir = positive_zeros(dir);
+    BvhRay::new(origin - dir * BACKOFF, dir, BACKOFF, t_max + BACKOFF)
 }
 
 /// Replaces `-0.0` components by `+0.0`: obvhs 0.4 derives the traversal octant from
@@ -254,6 +272,25 @@ mod tests {
         assert!(!bvh.occluded(o, -Vec3A::Z, 1.5));
         assert!(bvh
             .intersect(Vec3A::splat(f32::NAN), -Vec3A::Z, 9.0)
+            .is_none());
+    }
+
+    /// Hits closer than obvhs' internal 1e-4 entry clamp are still found (and occlusion too):
+    /// without [`BACKOFF`] rays from near an inside corner passed through the adjacent wall.
+    #[test]
+    fn very_close_hits_are_found() {
+        let bvh = Bvh::build(&quad_mesh());
+        for t in [1e-3f32, 1.25e-4, 6.25e-5, 1.25e-5, 1e-6] {
+            let o = Vec3A::new(0.3, -0.2, t);
+            let hit = bvh
+                .intersect(o, -Vec3A::Z, f32::INFINITY)
+                .expect("close hit");
+            assert!((hit.t - t).abs() < 1e-6, "t = {t}: got {}", hit.t);
+            assert!(bvh.occluded(o, -Vec3A::Z, 1.0), "t = {t}");
+        }
+        // Nothing behind the origin is reported.
+        assert!(bvh
+            .intersect(Vec3A::new(0.3, -0.2, -1e-5), -Vec3A::Z, f32::INFINITY)
             .is_none());
     }
 
