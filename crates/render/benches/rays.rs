@@ -1,6 +1,7 @@
 //! Closest-hit and any-hit ray throughput of the obvhs CWBVH on a procedurally displaced
 //! sphere of 114 176 triangles (generated here), for incoherent rays from inside (like
-//! path-tracing bounces) and for primary rays from a pinhole camera outside.
+//! path-tracing bounces) and for primary rays from a pinhole camera outside; and the BVH
+//! build time (obvhs `medium_build`, single-threaded).
 //!
 //! `cargo bench -p render --bench rays` (add `-- --quick` for a short run).
 
@@ -92,6 +93,14 @@ fn rays(c: &mut Criterion) {
         })
     });
     group.finish();
+
+    let mut build = c.benchmark_group("bvh_build");
+    build.sample_size(10);
+    build.throughput(Throughput::Elements(mesh.triangle_count() as u64));
+    build.bench_function("cwbvh_medium_114k_tris", |b| {
+        b.iter(|| black_box(Bvh::build(&mesh)))
+    });
+    build.finish();
 }
 
 criterion_group!(benches, rays);
