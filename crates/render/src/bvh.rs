@@ -110,9 +110,14 @@ impl Bvh {
         if !(origin.is_finite() && dir.is_finite()) || dir == Vec3A::ZERO || t_max.is_nan() {
             return None;
         }
-        let ray = backed_off_ray(origin, dir, t_max);
+        let (traversal, exact) = query_rays(origin, dir, t_max);
         let mut hit = RayHit::none();
-        if !bvh.ray_traverse(ray, &mut hit, |r, id| self.tris[id].intersect(r)) {
+        // The triangle test uses the exact ray (so ray offsetting stays valid); its distance
+        // is shifted into the backed-off traversal ray's parametrisation.
+        let found = bvh.ray_traverse(traversal, &mut hit, |_, id| {
+            self.tris[id].intersect(&exact) + BACKOFF
+        });
+        if !found {
             return None;
         }
         let slot = hit.primitive_id as usize;
@@ -135,8 +140,14 @@ impl Bvh {
         if !(origin.is_finite() && dir.is_finite()) || dir == Vec3A::ZERO || t_max.is_nan() {
             return true;
         }
-        let ray = backed_off_ray(origin, dir, t_max);
-        !bvh.ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r))
+        let (traversal, exact) = query_rays(origin, dir, t_max);
+        !bvh.ray_traverse_miss(traversal, |_, id| {
+            if self.tris[id].intersect(&exact).is_finite() {
+                0.0
+            } else {
+                f32::INFINITY
+            }
+        })
     }
 }
 
@@ -145,17 +156,29 @@ impl Bvh {
 /// obvhs 0.4's CWBVH traversal clamps node entry distances to at least `1e-4`
 /// (`cwbvh/node.rs`, `EPSILON`), so a triangle closer than that to the ray origin is never
 /// tested: rays leaving a point near an inside corner passed through the neighbouring wall
-/// (found by `tests/mlt_convergence.rs`: light leaking out of a closed box). Starting the ray
-/// `BACKOFF > 1e-4` behind the origin with `tmin = BACKOFF` makes the clamp land before the
-/// true origin; the triangle test's `t >= tmin` still rejects anything behind it.
+/// (found by `tests/mlt_convergence.rs`: light leaking out of a closed box). The *traversal*
+/// ray therefore starts `BACKOFF > 1e-4` behind the origin, so the clamp lands before the
+/// true origin. Triangles are still tested against the exact ray (`tmin = 0` at the true
+/// origin): testing them against the backed-off ray with `tmin = BACKOFF` puts the rounding
+/// error of the test at the scale of the scene's coordinates, above the ray-origin offsets of
+/// [`offset_ray_origin`], and shadow rays then hit their own surface (found by
+/// `tests/bdpt_vs_pt.rs`: PT's direct light was up to 3x too dark on the Cornell box floor).
 const BACKOFF: f32 = 2.5e-4;
 
-/// The obvhs ray for the segment `origin + t dir`, `0 <= t <= t_max`, started [`BACKOFF`]
-/// behind `origin`.
+/// The obvhs rays for the segment `origin + t dir`, `0 <= t <= t_max`: the traversal ray,
+/// started [`BACKOFF`] behind `origin` (so its parameter is `t + BACKOFF`), and the exact ray
+/// for the triangle tests.
 #[inline]
-fn backed_off_ray(origin: Vec3A, dir: Vec3A, t_max: f32) -> BvhRay {
+fn query_rays(origin: Vec3A, dir: Vec3A, t_max: f32) -> (BvhRay, BvhRay) {
     let dir = positive_zeros(dir);
-    BvhRay::new(origin - dir * BACKOFF, dir, BACKOFF, t_max + BACKOFF)
+    // `tmin` just above zero: a ray leaving a surface that lies exactly in a coordinate plane
+    // through 0 (zero error bound, offset by one ulp) re-hits it at `t = ±0`, which
+    // `t >= 0` would accept.
+    let exact = BvhRay::new(origin, dir, f32::MIN_POSITIVE, t_max);
+    let mut traversal = exact;
+    traversal.origin = origin - dir * BACKOFF;
+    traversal.tmax = t_max + BACKOFF;
+    (traversal, exact)
 }
 
 /// Replaces `-0.0` components by `+0.0`: obvhs 0.4 derives the traversal octant from

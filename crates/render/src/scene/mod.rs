@@ -534,6 +534,73 @@ mod tests {
         let _ = s.bsdf(&si);
     }
 
+    /// Shadow rays from surface points to an unblocked light are never occluded by the surface
+    /// they start on (Cornell-box scale, where offsets are ~1e-7), nor rays leaving it.
+    #[test]
+    fn no_self_shadowing() {
+        use crate::sampler::{IndependentSampler, Sampler};
+        let mut m = Mesh::new();
+        let q = |y: f32, s: f32| {
+            [
+                Vec3A::new(0.0, y, 0.0),
+                Vec3A::new(0.0, y, s),
+                Vec3A::new(s, y, s),
+                Vec3A::new(s, y, 0.0),
+            ]
+        };
+        m.add_quad(q(0.0, 0.5559), 0); // floor, facing +y
+        let mut light = q(0.5487, 0.5559);
+        light.reverse(); // facing -y
+        m.add_quad(light, 1);
+        let scene = Scene::new(
+            m,
+            vec![
+                Material::default(),
+                Material::diffuse("light", Vec3::ZERO, Vec3::ONE),
+            ],
+            vec![],
+            CameraSpec::look_at(
+                Vec3A::new(0.278, 0.45, 0.278),
+                Vec3A::new(0.278, 0.0, 0.279),
+                Vec3A::Z,
+                60.0,
+            ),
+            64,
+            64,
+        );
+        let mut s = IndependentSampler::new(4);
+        let (mut tested, mut blocked, mut rehit) = (0, 0, 0);
+        for i in 0..20_000u64 {
+            s.start_pixel_sample(i, 0);
+            let p = s.next_2d() * 64.0;
+            let ray = scene.camera().generate_ray(p, Vec2::ZERO, 0.0);
+            let Some(si) = scene.intersect(&ray) else {
+                continue;
+            };
+            if si.material != 0 {
+                continue;
+            }
+            let ls = scene
+                .lights()
+                .sample_li(si.p, s.next_1d(), s.next_2d())
+                .unwrap();
+            tested += 1;
+            if !scene.unoccluded(&si, ls.p) {
+                blocked += 1;
+            }
+            // A grazing ray leaving the floor must not hit the floor again.
+            let d = s.next_2d();
+            let dir = Vec3A::new(d.x - 0.5, 1e-3 + 0.01 * d.y, 0.5 - d.y).normalize();
+            if let Some(h) = scene.intersect(&si.spawn_ray(dir, 0.0)) {
+                if h.material == 0 {
+                    rehit += 1;
+                }
+            }
+        }
+        assert!(tested > 10_000, "{tested}");
+        assert_eq!((blocked, rehit), (0, 0), "of {tested} shadow rays");
+    }
+
     #[test]
     fn framing_sees_the_whole_box() {
         let spec = CameraSpec::framing(Vec3A::splat(-1.0), Vec3A::splat(1.0));
