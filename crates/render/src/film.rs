@@ -60,18 +60,29 @@ impl Filter {
         }
     }
 
-    /// The filter value at offset `d` (pixels) from a pixel centre.
+    /// The filter value at offset `d = pixel centre - sample position` (pixels). The box is
+    /// half-open, `-r < d <= r` per axis, so that with `r = 0.5` a sample at `p` lands in
+    /// exactly the pixel `floor(p)`, including on pixel boundaries.
     #[inline]
     #[must_use]
     pub fn evaluate(&self, d: Vec2) -> f32 {
         let r = self.radius();
-        let d = d.abs();
-        if d.x >= r || d.y >= r {
-            return 0.0;
-        }
         match self {
-            Filter::Box { .. } => 1.0,
-            Filter::Tent { .. } => (1.0 - d.x / r) * (1.0 - d.y / r),
+            Filter::Box { .. } => {
+                let inside = |v: f32| -r < v && v <= r;
+                if inside(d.x) && inside(d.y) {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            Filter::Tent { .. } => {
+                let d = d.abs();
+                if d.x >= r || d.y >= r {
+                    return 0.0;
+                }
+                (1.0 - d.x / r) * (1.0 - d.y / r)
+            }
         }
     }
 
@@ -85,13 +96,13 @@ impl Filter {
         }
     }
 
-    /// The pixel index range `[lo, hi]` along one axis whose centres are within the radius of
-    /// coordinate `p` (possibly empty: `lo > hi`).
+    /// The pixel index range `[lo, hi]` along one axis whose centres `c` satisfy
+    /// `-r < c - p <= r` (a superset of the pixels with a nonzero weight).
     #[inline]
     fn pixel_range(&self, p: f32) -> (i64, i64) {
         let r = self.radius();
         let lo = (p - 0.5 - r).floor() as i64 + 1;
-        let hi = (p - 0.5 + r).ceil() as i64 - 1;
+        let hi = (p - 0.5 + r).floor() as i64;
         (lo, hi)
     }
 }
@@ -408,12 +419,17 @@ mod tests {
         tile.add_sample(Vec2::new(1.9, 2.1), Vec3::new(3.0, 2.0, 1.0));
         assert!(!tile.add_sample(Vec2::new(0.5, 0.5), Vec3::new(f32::NAN, 0.0, 0.0)));
         assert!(!tile.add_sample(Vec2::new(0.5, 0.5), Vec3::splat(f32::INFINITY)));
+        // On a pixel corner: belongs to the pixel whose top-left corner it is.
+        tile.add_sample(Vec2::new(3.0, 1.0), Vec3::ONE);
         film.merge_tile(&tile);
         let img = film.image(1.0);
         assert_eq!(img.get(1, 2), [2.0, 2.0, 2.0]);
         assert_eq!(img.get(0, 0), [0.0; 3]);
+        assert_eq!(img.get(3, 1), [1.0; 3]);
+        assert_eq!(img.get(2, 1), [0.0; 3]);
+        assert_eq!(img.get(3, 0), [0.0; 3]);
         assert_eq!(film.nonfinite, 2);
-        assert_eq!(film.samples, 4);
+        assert_eq!(film.samples, 5);
     }
 
     #[test]
