@@ -39,6 +39,6 @@ mod proposal;
 mod state;
 
 pub use error::PssError;
-pub use mutation::{wrap, KelemenParams, SmallMutation};
+pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
 pub use proposal::{LargeStep, PssmltProposal, SmallStep, ALL_STREAMS};
 pub use state::{Pending, PssState, MAX_STREAMS};

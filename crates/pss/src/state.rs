@@ -46,7 +46,7 @@ pub enum Pending {
 /// changes the kernel between steps, catch-up differs slightly from eager mutation with the
 /// historical kernels (documented reading; the stationary distribution of unread coordinates
 /// is uniform either way).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct PssState {
     values: Vec<f64>,
     /// Per coordinate: the stream iteration at which it was last brought up to date.
@@ -60,6 +60,28 @@ pub struct PssState {
     key: u64,
     cursor: [usize; MAX_STREAMS],
     stream: usize,
+}
+
+impl Clone for PssState {
+    fn clone(&self) -> Self {
+        let mut s = Self::new(self.streams, self.key);
+        s.clone_from(self);
+        s
+    }
+
+    /// Copies `source` into `self` reusing `self`'s buffers: no allocation per proposal once
+    /// the buffers have grown (`derive(Clone)` would allocate new vectors every time).
+    fn clone_from(&mut self, source: &Self) {
+        self.values.clone_from(&source.values);
+        self.stamps.clone_from(&source.stamps);
+        self.streams = source.streams;
+        self.iteration = source.iteration;
+        self.last_large = source.last_large;
+        self.pending = source.pending;
+        self.key = source.key;
+        self.cursor = source.cursor;
+        self.stream = source.stream;
+    }
 }
 
 impl PssState {
