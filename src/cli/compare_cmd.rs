@@ -11,10 +11,10 @@ use super::{parse, CliResult};
 /// Arguments of `chainlight compare`.
 #[derive(Debug, Args)]
 pub(crate) struct CompareArgs {
-    /// The image to measure (OpenEXR).
+    /// The image to measure (OpenEXR .exr or Portable Float Map .pfm).
     #[arg(value_name = "IMAGE")]
     image: PathBuf,
-    /// The reference image (OpenEXR, same size).
+    /// The reference image (.exr or .pfm, same size).
     #[arg(value_name = "REFERENCE")]
     reference: PathBuf,
     /// Where to write the false-colour error map [default: <IMAGE stem>_error.png next to IMAGE].
@@ -54,8 +54,8 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<()> {
     scale
         .validate()
         .map_err(|e| format!("--error-min/--error-max: {e}"))?;
-    let image = image_io::read_exr(&args.image)?;
-    let reference = image_io::read_exr(&args.reference)?;
+    let image = image_io::read_image(&args.image)?;
+    let reference = image_io::read_image(&args.reference)?;
     let context = |e: metrics::MetricError| {
         format!(
             "cannot compare {} with reference {}: {e}",

@@ -53,6 +53,20 @@ pub enum ImageError {
         /// What the EXR decoder or encoder reported.
         reason: String,
     },
+    /// The PFM file is malformed (bad header, size, scale or truncated data).
+    #[error("{path}: not a readable PFM file: {reason}")]
+    Pfm {
+        /// The file.
+        path: PathBuf,
+        /// What was wrong.
+        reason: String,
+    },
+    /// The file's extension names no image format this crate reads.
+    #[error("{path}: unsupported image format (expected .exr or .pfm)")]
+    UnsupportedFormat {
+        /// The file.
+        path: PathBuf,
+    },
     /// The PNG encoder failed.
     #[error("{path}: cannot write PNG: {reason}")]
     Png {
@@ -138,6 +152,102 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), ImageError
     .write()
     .to_file(path)
     .map_err(|e| exr_error(path, e))
+}
+
+/// Reads an image by extension: `.exr` ([`read_exr`]) or `.pfm` ([`read_pfm`]).
+///
+/// # Errors
+/// [`ImageError::UnsupportedFormat`] for other extensions, else as the reader.
+pub fn read_image(path: impl AsRef<Path>) -> Result<Image, ImageError> {
+    let path = path.as_ref();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("exr") => read_exr(path),
+        Some("pfm") => read_pfm(path),
+        _ => Err(ImageError::UnsupportedFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// Reads a colour Portable Float Map (`PF` header, width and height, scale whose sign gives
+/// the byte order, rows bottom to top), the format of pbrt-style research renderers and of
+/// corona-13's `pfmdiff`. Greyscale (`Pf`) maps are read as grey RGB.
+///
+/// # Errors
+/// [`ImageError::Io`] if the file cannot be read, [`ImageError::Pfm`] if it is malformed.
+pub fn read_pfm(path: impl AsRef<Path>) -> Result<Image, ImageError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| ImageError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let bad = |reason: &str| ImageError::Pfm {
+        path: path.to_path_buf(),
+        reason: reason.to_owned(),
+    };
+    // Three whitespace-separated header tokens after the magic, then one whitespace byte.
+    let mut fields = Vec::new();
+    let mut i = 0;
+    while fields.len() < 4 {
+        while i < bytes.len() && bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        let start = i;
+        while i < bytes.len() && !bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if start == i {
+            return Err(bad("truncated header"));
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..i]).into_owned());
+    }
+    i += 1;
+    let channels = match fields[0].as_str() {
+        "PF" => 3,
+        "Pf" => 1,
+        _ => return Err(bad("missing PF/Pf magic")),
+    };
+    let width: usize = fields[1]
+        .parse()
+        .map_err(|_| bad("width is not a number"))?;
+    let height: usize = fields[2]
+        .parse()
+        .map_err(|_| bad("height is not a number"))?;
+    let scale: f32 = fields[3]
+        .parse()
+        .map_err(|_| bad("scale is not a number"))?;
+    if width == 0 || height == 0 || width > MAX_DIMENSION || height > MAX_DIMENSION {
+        return Err(bad("width and height must be in 1..=65536"));
+    }
+    if scale == 0.0 || !scale.is_finite() {
+        return Err(bad("scale must be finite and nonzero"));
+    }
+    let need = width * height * channels * 4;
+    let data = bytes
+        .get(i..i + need)
+        .ok_or_else(|| bad("pixel data is truncated"))?;
+    let little = scale < 0.0;
+    let mut image = Image::new(width, height);
+    for (k, chunk) in data.chunks_exact(4).enumerate() {
+        let raw = [chunk[0], chunk[1], chunk[2], chunk[3]];
+        let v = if little {
+            f32::from_le_bytes(raw)
+        } else {
+            f32::from_be_bytes(raw)
+        };
+        let (px, c) = (k / channels, k % channels);
+        let (x, y) = (px % width, height - 1 - px / width);
+        let p = &mut image.pixels[y * width + x];
+        if channels == 1 {
+            *p = [v; 3];
+        } else {
+            p[c] = v;
+        }
+    }
+    Ok(image)
 }
 
 /// Reads the first RGB(A) layer of the OpenEXR file at `path` as `f32` linear RGB.
@@ -419,6 +529,34 @@ mod tests {
         image.set(1, 1, [f32::NAN, f32::INFINITY, f32::MIN_POSITIVE / 8.0]);
         image.set(4, 2, [0.1 + 0.2, f32::NEG_INFINITY, -0.0]);
         image
+    }
+
+    #[test]
+    fn pfm_reads_both_byte_orders_and_rejects_garbage() {
+        let dir = std::env::temp_dir().join(format!("chainlight-pfm-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 2x1 image, bottom-to-top rows (one row here), little endian.
+        let mut le = b"PF\n2 1\n-1.0\n".to_vec();
+        let mut be = b"PF\n2 1\n1.0\n".to_vec();
+        for v in [1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0] {
+            le.extend_from_slice(&v.to_le_bytes());
+            be.extend_from_slice(&v.to_be_bytes());
+        }
+        for (name, bytes) in [("le.pfm", &le), ("be.pfm", &be)] {
+            let p = dir.join(name);
+            std::fs::write(&p, bytes).unwrap();
+            let img = read_image(&p).unwrap();
+            assert_eq!(img.pixels, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+        }
+        let bad = dir.join("bad.pfm");
+        std::fs::write(&bad, &le[..le.len() - 3]).unwrap();
+        assert!(matches!(read_pfm(&bad), Err(ImageError::Pfm { .. })));
+        std::fs::write(&bad, b"P6\n1 1\n255\n").unwrap();
+        assert!(matches!(read_pfm(&bad), Err(ImageError::Pfm { .. })));
+        assert!(matches!(
+            read_image(dir.join("x.png")),
+            Err(ImageError::UnsupportedFormat { .. })
+        ));
     }
 
     #[test]
