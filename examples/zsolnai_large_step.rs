@@ -18,7 +18,7 @@ use render::scene::Scene;
 use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
 
 fn downsample(img: &Image, w: usize, h: usize) -> Option<Image> {
-    if img.width % w != 0 || img.height % h != 0 {
+    if !img.width.is_multiple_of(w) || !img.height.is_multiple_of(h) {
         return None;
     }
     let (fx, fy) = (img.width / w, img.height / h);
