@@ -316,3 +316,107 @@ fn renders_a_bundled_gltf_scene() {
     assert_eq!(read_exr(&out).unwrap().width, 8);
     assert!(stdout(&output).contains("cornell.gltf"));
 }
+
+#[test]
+fn mcmc_flags_are_validated() {
+    assert_fails_with(
+        &["render", "--integrator", "pssmlt", "--large-step", "1.5"],
+        &["--large-step", "0..=1"],
+    );
+    assert_fails_with(
+        &["render", "--integrator", "mmlt", "--large-step", "often"],
+        &["--large-step", "auto"],
+    );
+    assert_fails_with(
+        &["render", "--small-step", "gaussian=-1"],
+        &["--small-step", "(0, 10]"],
+    );
+    assert_fails_with(
+        &["render", "--small-step", "uniform"],
+        &["--small-step", "kelemen"],
+    );
+    assert_fails_with(&["render", "--chains", "0"], &["--chains"]);
+    assert_fails_with(
+        &["render", "--bootstrap-samples", "0"],
+        &["--bootstrap-samples"],
+    );
+}
+
+/// Every integrator renders a tiny image; the MCMC ones log their bootstrap and, with
+/// `--large-step auto`, the measured statistics and the chosen probability.
+#[test]
+fn every_integrator_renders_and_mcmc_logs_its_statistics() {
+    let dir = temp_dir("integrators");
+    for integrator in ["pt", "bdpt", "pssmlt", "mmlt"] {
+        let out = dir.join(format!("{integrator}.exr"));
+        let output = chainlight(&[
+            "render",
+            "--integrator",
+            integrator,
+            "--mutations-per-pixel",
+            "4",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--threads",
+            "2",
+            "--large-step",
+            "auto",
+            "--bootstrap-samples",
+            "2000",
+            "--chains",
+            "16",
+            "-o",
+            path_str(&out),
+        ]);
+        assert!(output.status.success(), "{integrator}: {}", stderr(&output));
+        let img = read_exr(&out).unwrap();
+        assert!(img
+            .pixels
+            .iter()
+            .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
+        assert!(
+            img.pixels.iter().any(|p| p[0] > 0.0),
+            "{integrator}: black image"
+        );
+        if integrator == "pssmlt" || integrator == "mmlt" {
+            let err = stderr(&output);
+            assert!(err.contains("bootstrap: b ="), "{err}");
+            assert!(
+                err.contains("automatic large-step control: eta_s =") && err.contains("p_large ="),
+                "{err}"
+            );
+        }
+    }
+}
+
+#[test]
+fn bdpt_strategy_images_are_written() {
+    let dir = temp_dir("strategies");
+    let out = dir.join("b.exr");
+    let output = chainlight(&[
+        "render",
+        "--integrator",
+        "bdpt",
+        "--spp",
+        "2",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--max-depth",
+        "2",
+        "--strategy-images",
+        "-o",
+        path_str(&out),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    for (s, t) in [(0, 2), (1, 2), (2, 1)] {
+        assert!(
+            dir.join(format!("b_s{s}_t{t}.exr")).is_file(),
+            "missing strategy ({s},{t}): {}",
+            stdout(&output)
+        );
+    }
+}
