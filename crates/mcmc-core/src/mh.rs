@@ -23,6 +23,52 @@ pub struct Mh<P> {
     pub proposal: P,
 }
 
+/// The decision half of an MH step, once `y` holds the candidate `proposed` describes:
+/// evaluate it, compute `a` with the Hastings term mapped by `hastings` (the identity for
+/// [`Mh`]; negative controls in `testing` drop it), report to the observer, accept or reject.
+pub(crate) fn mh_decide<T, R, O>(
+    target: &T,
+    current: &mut SampleOf<T>,
+    y: &mut SampleOf<T>,
+    proposed: Proposed,
+    hastings: impl Fn(f64) -> f64,
+    rng: &mut R,
+    observer: &mut O,
+) -> StepInfo
+where
+    T: Target,
+    R: Rng + ?Sized,
+    O: Observer<T::State, T::Payload> + ?Sized,
+{
+    let mut info = StepInfo::new(proposed.component());
+    info.stages_tried = 1;
+    let a = match proposed {
+        Proposed::Invalid { .. } => 0.0,
+        Proposed::Move { log_hastings, .. } => {
+            y.log_density = target.evaluate(&mut y.state, &mut y.payload);
+            info.candidate_log_density[0] = y.log_density;
+            if y.log_density.is_nan() || y.log_density == f64::INFINITY || log_hastings.is_nan() {
+                info.non_finite = true;
+                0.0
+            } else {
+                mh_accept_prob(current.log_density, y.log_density, hastings(log_hastings))
+            }
+        }
+    };
+    info.accept_prob[0] = a;
+    observer.splat(current, 1.0 - a);
+    if a > 0.0 {
+        observer.splat(y, a);
+    }
+    let accept = a >= 1.0 || (a > 0.0 && rng.random::<f64>() < a);
+    if accept {
+        std::mem::swap(current, y);
+        info.accepted_stage = 1;
+    }
+    observer.step(&info);
+    info
+}
+
 impl<P> Mh<P> {
     /// An MH kernel with the given proposal.
     pub fn new(proposal: P) -> Self {
@@ -43,36 +89,18 @@ impl<T: Target, P: Proposal<T::State>> Kernel<T> for Mh<P> {
         R: Rng + ?Sized,
         O: Observer<T::State, T::Payload> + ?Sized,
     {
-        let y = &mut scratch[0];
-        let proposed = self.proposal.propose(&current.state, &mut y.state, rng);
-        let mut info = StepInfo::new(proposed.component());
-        info.stages_tried = 1;
-        let a = match proposed {
-            Proposed::Invalid { .. } => 0.0,
-            Proposed::Move { log_hastings, .. } => {
-                y.log_density = target.evaluate(&mut y.state, &mut y.payload);
-                info.candidate_log_density[0] = y.log_density;
-                if y.log_density.is_nan() || y.log_density == f64::INFINITY || log_hastings.is_nan()
-                {
-                    info.non_finite = true;
-                    0.0
-                } else {
-                    mh_accept_prob(current.log_density, y.log_density, log_hastings)
-                }
-            }
-        };
-        info.accept_prob[0] = a;
-        observer.splat(current, 1.0 - a);
-        if a > 0.0 {
-            observer.splat(y, a);
-        }
-        let accept = a >= 1.0 || (a > 0.0 && rng.random::<f64>() < a);
-        if accept {
-            std::mem::swap(current, y);
-            info.accepted_stage = 1;
-        }
-        observer.step(&info);
-        info
+        let proposed = self
+            .proposal
+            .propose(&current.state, &mut scratch[0].state, rng);
+        mh_decide(
+            target,
+            current,
+            &mut scratch[0],
+            proposed,
+            |h| h,
+            rng,
+            observer,
+        )
     }
 
     fn log_flow(&self, _target: &T, path: &[SampleOf<T>]) -> f64 {

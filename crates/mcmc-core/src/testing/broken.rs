@@ -5,9 +5,9 @@
 //! on the same target and proposal where the correct kernel passes. Other crates reuse them to
 //! show their own tests have teeth.
 
-use rand::{Rng, RngExt};
+use rand::Rng;
 
-use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
+use crate::kernel::{mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
 use crate::target::{SampleOf, Target};
 
@@ -77,35 +77,19 @@ impl<T: Target, P: Proposal<T::State>> Kernel<T> for MhWithoutHastings<P> {
         R: Rng + ?Sized,
         O: Observer<T::State, T::Payload> + ?Sized,
     {
-        let y = &mut scratch[0];
-        let proposed = self.proposal.propose(&current.state, &mut y.state, rng);
-        let mut info = StepInfo::new(proposed.component());
-        info.stages_tried = 1;
-        let a = match proposed {
-            Proposed::Invalid { .. } => 0.0,
-            Proposed::Move { .. } => {
-                y.log_density = target.evaluate(&mut y.state, &mut y.payload);
-                info.candidate_log_density[0] = y.log_density;
-                if y.log_density.is_nan() || y.log_density == f64::INFINITY {
-                    info.non_finite = true;
-                    0.0
-                } else {
-                    // The bug: the Hastings term is dropped.
-                    mh_accept_prob(current.log_density, y.log_density, 0.0)
-                }
-            }
-        };
-        info.accept_prob[0] = a;
-        observer.splat(current, 1.0 - a);
-        if a > 0.0 {
-            observer.splat(y, a);
-        }
-        if a >= 1.0 || (a > 0.0 && rng.random::<f64>() < a) {
-            std::mem::swap(current, y);
-            info.accepted_stage = 1;
-        }
-        observer.step(&info);
-        info
+        let proposed = self
+            .proposal
+            .propose(&current.state, &mut scratch[0].state, rng);
+        // The bug: the Hastings term is dropped; everything else is the real MH decision.
+        crate::mh::mh_decide(
+            target,
+            current,
+            &mut scratch[0],
+            proposed,
+            |_| 0.0,
+            rng,
+            observer,
+        )
     }
 
     fn log_flow(&self, _target: &T, path: &[SampleOf<T>]) -> f64 {
