@@ -40,6 +40,7 @@ pub mod stats;
 mod target;
 #[cfg(feature = "testing")]
 pub mod testing;
+pub mod torus;
 pub mod toy;
 
 pub use chain::Chain;

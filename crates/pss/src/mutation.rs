@@ -4,6 +4,9 @@ use std::f64::consts::PI;
 
 use crate::PssError;
 
+/// Wraps a real number into [0, 1) (re-exported from [`mcmc_core::torus`], where it lives).
+pub use mcmc_core::torus::wrap;
+
 /// Parameters of Kelemen's exponential perturbation (Kelemen et al. 2002, section 4.1; DR paper
 /// eq. 9): the displacement magnitude is log-uniform on `[s1, s2]`, the sign is uniform.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -199,19 +202,6 @@ pub fn standard_normal_quantile(p: f64) -> f64 {
     }
 }
 
-/// Wraps a real number into [0, 1).
-#[inline]
-#[must_use]
-pub fn wrap(x: f64) -> f64 {
-    let y = x - x.floor();
-    // x - floor(x) can round to 1.0 for tiny negative x.
-    if y >= 1.0 {
-        0.0
-    } else {
-        y
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,13 +256,5 @@ mod tests {
             );
         }
         assert!(standard_normal_quantile(0.0).is_finite());
-    }
-
-    #[test]
-    fn wrap_stays_in_unit_interval() {
-        for x in [-1e-18, -0.5, 1.0, 2.25, -3.75, 0.0] {
-            let y = wrap(x);
-            assert!((0.0..1.0).contains(&y), "{x} -> {y}");
-        }
     }
 }

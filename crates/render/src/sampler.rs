@@ -7,6 +7,7 @@
 //! that, e.g., mutating the camera subpath does not shift the light subpath's numbers.
 
 use glam::Vec2;
+use mcmc_core::seed::mix64;
 
 /// A stream of primary samples. Bidirectional integrators draw camera-subpath numbers from
 /// [`Stream::Camera`], light-subpath numbers from [`Stream::Light`] and connection / strategy
@@ -64,15 +65,6 @@ impl<S: Sampler + ?Sized> Sampler for &mut S {
     fn next_2d(&mut self) -> Vec2 {
         (**self).next_2d()
     }
-}
-
-/// SplitMix64 finaliser (Steele et al. 2014): a bijective 64-bit mix with full avalanche.
-#[inline]
-#[must_use]
-pub const fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }
 
 /// Maps the top 24 bits of `bits` to a float in `[0, 1)` (exactly representable, never 1).

@@ -44,7 +44,9 @@ pub use correlated_gaussian::CorrelatedGaussian;
 pub use gaussian_mixture::{DiagonalGaussian, GaussianMixture2d, MAX_MIXTURE_COMPONENTS};
 pub use piecewise::PiecewiseConstant;
 pub use ridge::Ridge;
-pub use torus_mixture::{wrap, wrapped_normal_pdf, TorusMixture};
+pub use torus_mixture::{wrapped_normal_pdf, TorusMixture};
+/// Re-exported from [`crate::torus`], where it lives.
+pub use crate::torus::wrap;
 pub use uniform_mixture::UniformMixture;
 
 use rand::Rng;

@@ -6,6 +6,7 @@ use super::gaussian_mixture::{normalise_components, pick_component, DiagonalGaus
 use super::special::normal_interval;
 use super::{impl_toy_target, standard_normal, uniform_edges, Bins, ToyTarget};
 use crate::proposal::log_sum_exp;
+use crate::torus::wrap;
 use crate::McmcError;
 
 /// Number of periodic images summed on each side (`m = -3..=3`). With `sd <= 0.25` the
@@ -15,18 +16,6 @@ const IMAGES: i32 = 3;
 
 /// Largest standard deviation accepted (see [`IMAGES`]).
 const MAX_SD: f64 = 0.25;
-
-/// `x mod 1` in `[0, 1)` (a tiny negative `x` would round to 1.0; it is mapped to 0).
-#[inline]
-#[must_use]
-pub fn wrap(x: f64) -> f64 {
-    let w = x - x.floor();
-    if w >= 1.0 {
-        0.0
-    } else {
-        w
-    }
-}
 
 /// The density of the wrapped normal `sum_{m in Z} N(t + m; mean, sd^2)` at `t`, summing the
 /// images `m = -3..=3`: exact to `1e-23` relative for `sd <= 0.25` and `|t - mean| <= 1`
@@ -201,7 +190,5 @@ mod tests {
         assert!(t.log_density(&[0.01, 0.5]) > t.log_density(&[0.8, 0.5]));
         assert_eq!(t.log_density(&[1.01, 0.5]), f64::NEG_INFINITY);
         assert_eq!(t.log_density(&[0.5, -0.01]), f64::NEG_INFINITY);
-        assert_eq!(wrap(-1e-18), 0.0);
-        assert_eq!(wrap(1.25), 0.25);
     }
 }
