@@ -9,12 +9,15 @@
 //! valid hemisphere, and `pdf` must not count it. Bins with expected count < 5 are pooled.
 //! Delta lobes (smooth dielectric) are tested on the discrete lobe frequencies instead.
 //!
-//! Significance: alpha = 0.01 for the whole file, split over the [`TOTAL_TESTS`] tests with the
-//! Sidak correction `1 - (1 - alpha)^(1/M)`. Negative controls (wrong pdf) must fail at the same
-//! level. Run with `cargo test -p render --release --test bsdf_chi2 -- --nocapture` to see the
+//! Significance: alpha = 0.01 (`mcmc_core::testing::ALPHA`) for the whole file, split over the
+//! [`total_tests`] tests with the Sidak correction `1 - (1 - alpha)^(1/M)`; pooling, statistic
+//! and p-value come from `mcmc_core::testing::chi_square`. Negative controls (wrong pdf) must
+//! fail at the same level. Run with `cargo test -p render --release --test bsdf_chi2 -- --nocapture` to see the
 //! statistics of every case.
 
 use glam::{Vec2, Vec3, Vec3A};
+use mcmc_core::testing::chi_square::{self, MIN_EXPECTED};
+use mcmc_core::testing::{sidak_alpha, ALPHA};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use render::material::{fresnel_dielectric, Bsdf, TransportMode};
@@ -26,119 +29,15 @@ const SAMPLES: usize = 1_000_000;
 const COS_BINS: usize = 24;
 /// Bins in `phi` over `[0, 2 pi)`.
 const PHI_BINS: usize = 48;
-/// Family-wise significance level of the whole file.
-const ALPHA: f64 = 0.01;
-/// Bins with a smaller expected count are pooled.
-const MIN_EXPECTED: f64 = 5.0;
 
 /// Number of hypothesis tests in this file (glossy cases + delta cases), for Sidak.
 fn total_tests() -> usize {
     glossy_cases().len() + smooth_dielectric_cases().len()
 }
 
-/// Per-test significance level after the Sidak correction.
+/// Per-test significance level: the file-wide [`ALPHA`] after the Sidak correction.
 fn sidak_level() -> f64 {
-    1.0 - (1.0 - ALPHA).powf(1.0 / total_tests() as f64)
-}
-
-// ---------------------------------------------------------------------------------------------
-// Chi-square distribution (regularised incomplete gamma), written for this file.
-// ---------------------------------------------------------------------------------------------
-
-/// `ln Gamma(x)` for `x > 0` by the Lanczos approximation (g = 7, n = 9; Numerical Recipes /
-/// Godfrey's coefficients), with the reflection formula below 1/2. Accurate to ~1e-13.
-fn ln_gamma(x: f64) -> f64 {
-    const G: f64 = 7.0;
-    const COEF: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        return (PI / (PI * x).sin()).ln() - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let mut a = COEF[0];
-    let t = x + G + 0.5;
-    for (i, c) in COEF.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * (2.0 * PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
-}
-
-/// Regularised upper incomplete gamma `Q(a, x) = Gamma(a, x) / Gamma(a)`: the power series of
-/// `P` for `x < a + 1`, else the Lentz continued fraction of `Q` (Numerical Recipes §6.2).
-fn gamma_q(a: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 1.0;
-    }
-    let log_prefactor = a * x.ln() - x - ln_gamma(a);
-    if x < a + 1.0 {
-        let (mut term, mut sum, mut n) = (1.0 / a, 1.0 / a, a);
-        for _ in 0..10_000 {
-            n += 1.0;
-            term *= x / n;
-            sum += term;
-            if term.abs() < sum.abs() * 1e-16 {
-                break;
-            }
-        }
-        1.0 - sum * log_prefactor.exp()
-    } else {
-        let tiny = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..10_000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = b + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let delta = d * c;
-            h *= delta;
-            if (delta - 1.0).abs() < 1e-16 {
-                break;
-            }
-        }
-        log_prefactor.exp() * h
-    }
-}
-
-/// Survival function of the chi-square distribution with `dof` degrees of freedom.
-fn chi2_sf(statistic: f64, dof: usize) -> f64 {
-    gamma_q(0.5 * dof as f64, 0.5 * statistic)
-}
-
-#[test]
-fn chi2_survival_function_known_values() {
-    // Upper 5% and 1% critical values from standard tables.
-    for (x, k, p) in [
-        (3.841_459, 1, 0.05),
-        (6.634_897, 1, 0.01),
-        (18.307_04, 10, 0.05),
-        (124.342_1, 100, 0.05),
-        (135.806_7, 100, 0.01),
-        (1_106.969, 1_000, 0.01),
-    ] {
-        let sf = chi2_sf(x, k);
-        assert!((sf - p).abs() < 1e-3 * p, "sf({x}, {k}) = {sf}, want {p}");
-    }
-    assert!((ln_gamma(5.0) - 24f64.ln()).abs() < 1e-12);
-    assert!((ln_gamma(0.5) - PI.sqrt().ln()).abs() < 1e-12);
+    sidak_alpha(ALPHA, total_tests())
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -222,38 +121,23 @@ struct Chi2 {
     stray: u64,
 }
 
-/// Pearson's statistic with pbrt-style pooling: bins are visited in increasing expected count;
-/// those below [`MIN_EXPECTED`] go into one pooled bin (which keeps absorbing bins until it
-/// reaches the threshold). Bins with zero expected count are left out, their samples counted
-/// as `stray`.
+/// Pearson's statistic after pooling bins to an expected count of at least
+/// [`MIN_EXPECTED`] (`mcmc_core::testing::chi_square`). Bins with zero expected count are left
+/// out, their samples counted as `stray`.
 fn chi2(observed: &[u64], expected: &[f64]) -> Chi2 {
-    let mut order: Vec<usize> = (0..expected.len()).collect();
-    order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
-    let (mut statistic, mut cells) = (0.0, 0usize);
-    let (mut pool_obs, mut pool_exp) = (0.0, 0.0);
-    let mut stray = 0;
-    for i in order {
-        let (o, e) = (observed[i] as f64, expected[i]);
-        if e <= 0.0 {
-            stray += observed[i];
-        } else if e < MIN_EXPECTED || (pool_exp > 0.0 && pool_exp < MIN_EXPECTED) {
-            pool_obs += o;
-            pool_exp += e;
-        } else {
-            statistic += (o - e) * (o - e) / e;
-            cells += 1;
-        }
-    }
-    if pool_exp > 0.0 {
-        statistic += (pool_obs - pool_exp) * (pool_obs - pool_exp) / pool_exp;
-        cells += 1;
-    }
-    let dof = cells.saturating_sub(1).max(1);
+    let pooled = chi_square::pool(observed, expected, MIN_EXPECTED);
+    let statistic = chi_square::statistic(&pooled.observed, &pooled.expected);
+    let dof = pooled.observed.len().saturating_sub(1);
+    let p_value = if dof == 0 {
+        1.0
+    } else {
+        chi_square::survival(statistic, dof as f64)
+    };
     Chi2 {
         statistic,
         dof,
-        p_value: chi2_sf(statistic, dof),
-        stray,
+        p_value,
+        stray: pooled.impossible,
     }
 }
 
