@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 
 use super::scene_api::{self, SceneRef};
-use super::vertex::{geometry_term, Vertex, VertexKind};
+use super::vertex::{geometry_term, visible, Vertex, VertexKind};
 use crate::material::TransportMode;
 use crate::sampler::{Sampler, Stream};
 
@@ -79,7 +79,7 @@ pub fn connect<S: Sampler + ?Sized>(
                     if qs.on_surface() && qs.kind == VertexKind::Surface {
                         contrib *= cs.wi.dot(qs.ns()).abs();
                     }
-                    if contrib != Vec3::ZERO && scene_api::visible(scene, qs, &cam) {
+                    if contrib != Vec3::ZERO && visible(scene, qs, &cam) {
                         l = contrib;
                         p_raster = Some(cs.p_raster);
                         sampled = Some(cam);
@@ -108,7 +108,7 @@ pub fn connect<S: Sampler + ?Sized>(
                     if pt.kind == VertexKind::Surface {
                         contrib *= wi.dot(pt.ns()).abs();
                     }
-                    if contrib != Vec3::ZERO && scene_api::visible(scene, pt, &v) {
+                    if contrib != Vec3::ZERO && visible(scene, pt, &v) {
                         l = contrib;
                         sampled = Some(v);
                     }

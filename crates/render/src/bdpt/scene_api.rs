@@ -1,9 +1,9 @@
 //! The scene queries BDPT needs, in one place: intersection with resolved BSDF and emitter,
-//! visibility between vertices, the camera, and the lights.
+//! visibility between points, the camera, and the lights. A leaf of the `bdpt` module: it
+//! knows nothing of vertices.
 
 use glam::{Vec2, Vec3, Vec3A};
 
-use super::vertex::Vertex;
 use crate::camera::{CameraWiSample, Ray};
 use crate::material::Bsdf;
 use crate::scene::Scene;
@@ -34,27 +34,11 @@ pub(crate) fn intersect(scene: SceneRef<'_>, ray: &Ray) -> Option<Hit> {
     })
 }
 
-/// A ray leaving vertex `v` in direction `dir`, offset off its surface.
+/// Mutual visibility of the points `a` and `b`; a nonzero normal marks a surface point, whose
+/// end of the shadow ray is offset off the surface.
 #[inline]
-pub(crate) fn spawn_ray(v: &Vertex, dir: Vec3A) -> Ray {
-    let origin = if v.on_surface() {
-        crate::bvh::offset_ray_origin(v.p, v.p_error, v.ng, dir)
-    } else {
-        v.p
-    };
-    Ray {
-        origin,
-        dir,
-        time: v.time,
-    }
-}
-
-/// Mutual visibility of two vertices.
-#[inline]
-pub(crate) fn visible(scene: SceneRef<'_>, a: &Vertex, b: &Vertex) -> bool {
-    let na = if a.on_surface() { a.ng } else { Vec3A::ZERO };
-    let nb = if b.on_surface() { b.ng } else { Vec3A::ZERO };
-    scene.unoccluded_between(a.p, na, b.p, nb)
+pub(crate) fn visible(scene: SceneRef<'_>, a: Vec3A, na: Vec3A, b: Vec3A, nb: Vec3A) -> bool {
+    scene.unoccluded_between(a, na, b, nb)
 }
 
 #[inline]

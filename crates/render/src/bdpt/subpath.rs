@@ -110,7 +110,7 @@ pub fn random_walk<S: Sampler + ?Sized>(
         }
         let here = path[idx];
         path[idx - 1].pdf_rev = here.convert_density(pdf_rev, &path[idx - 1]);
-        ray = scene_api::spawn_ray(&here, wi);
+        ray = here.spawn_ray(wi);
     }
     added
 }
@@ -195,7 +195,7 @@ pub fn light_subpath<S: Sampler + ?Sized>(
     let cos = le.n.dot(le.dir).abs();
     let beta = le.radiance * (cos / (le.pdf_pos * le.pdf_dir));
     let pdf_dir = le.pdf_dir;
-    let ray = scene_api::spawn_ray(&path[0], le.dir);
+    let ray = path[0].spawn_ray(le.dir);
     1 + random_walk(
         scene,
         ray,

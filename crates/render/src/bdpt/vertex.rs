@@ -92,6 +92,31 @@ impl Vertex {
         }
     }
 
+    /// A ray leaving this vertex in direction `dir`, offset off its surface.
+    #[inline]
+    pub(crate) fn spawn_ray(&self, dir: Vec3A) -> Ray {
+        let origin = if self.on_surface() {
+            crate::bvh::offset_ray_origin(self.p, self.p_error, self.ng, dir)
+        } else {
+            self.p
+        };
+        Ray {
+            origin,
+            dir,
+            time: self.time,
+        }
+    }
+
+    /// The geometric normal for shadow-ray offsets: zero off surfaces (the camera).
+    #[inline]
+    fn offset_normal(&self) -> Vec3A {
+        if self.on_surface() {
+            self.ng
+        } else {
+            Vec3A::ZERO
+        }
+    }
+
     /// True for surface vertices (the only ones with a normal that converts densities).
     #[inline]
     pub fn on_surface(&self) -> bool {
@@ -215,6 +240,12 @@ impl Vertex {
     }
 }
 
+/// Mutual visibility of two vertices.
+#[inline]
+pub(crate) fn visible(scene: SceneRef<'_>, a: &Vertex, b: &Vertex) -> bool {
+    scene_api::visible(scene, a.p, a.offset_normal(), b.p, b.offset_normal())
+}
+
 /// Geometry term `G = |cos_0| |cos_1| / d^2` between two vertices, times visibility (pbrt-v3
 /// `G`, using shading normals at surfaces).
 pub fn geometry_term(scene: SceneRef<'_>, v0: &Vertex, v1: &Vertex) -> f32 {
@@ -231,7 +262,7 @@ pub fn geometry_term(scene: SceneRef<'_>, v0: &Vertex, v1: &Vertex) -> f32 {
     if v1.on_surface() {
         g *= v1.ns().dot(dn).abs();
     }
-    if g == 0.0 || !scene_api::visible(scene, v0, v1) {
+    if g == 0.0 || !visible(scene, v0, v1) {
         return 0.0;
     }
     g
