@@ -5,6 +5,7 @@ use std::process::{Command, Output};
 
 use render::image::Image;
 use render::image_io::{read_exr, write_exr};
+use render::integrator::{IntegratorInfo, INTEGRATORS};
 
 fn chainlight(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_chainlight"))
@@ -342,12 +343,32 @@ fn mcmc_flags_are_validated() {
     );
 }
 
-/// Every integrator renders a tiny image; the MCMC ones log their bootstrap and, with
-/// `--large-step auto`, the measured statistics and the chosen probability.
+/// `render --help` lists every integrator of the table with its help line.
+#[test]
+fn help_lists_every_integrator_of_the_table() {
+    let output = chainlight(&["render", "--help"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let help = stdout(&output);
+    for info in INTEGRATORS {
+        let line = help
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{}:", info.name)))
+            .unwrap_or_else(|| panic!("no '{}:' line in:\n{help}", info.name));
+        assert!(line.contains(info.description), "{line}");
+    }
+}
+
+/// Every integrator of the table renders a tiny image; the MCMC ones log their bootstrap and,
+/// with `--large-step auto`, the measured statistics and the chosen probability.
 #[test]
 fn every_integrator_renders_and_mcmc_logs_its_statistics() {
     let dir = temp_dir("integrators");
-    for integrator in ["pt", "bdpt", "pssmlt", "mmlt"] {
+    for &IntegratorInfo {
+        name: integrator,
+        is_mcmc,
+        ..
+    } in INTEGRATORS
+    {
         let out = dir.join(format!("{integrator}.exr"));
         let output = chainlight(&[
             "render",
@@ -380,7 +401,7 @@ fn every_integrator_renders_and_mcmc_logs_its_statistics() {
             img.pixels.iter().any(|p| p[0] > 0.0),
             "{integrator}: black image"
         );
-        if integrator == "pssmlt" || integrator == "mmlt" {
+        if is_mcmc {
             let err = stderr(&output);
             assert!(err.contains("bootstrap: b ="), "{err}");
             assert!(

@@ -7,6 +7,7 @@ use std::time::Duration;
 use clap::Args;
 use pss::SmallMutation;
 use render::image_io;
+use render::integrator::{IntegratorKind, INTEGRATORS};
 use render::mlt::LargeStepMode;
 use render::scene::Scene;
 use render::session::{self, Budget, McmcSettings, RenderOutput, RenderSettings};
@@ -32,7 +33,7 @@ pub(crate) struct RenderArgs {
     #[arg(value_name = "SCENE")]
     scene: Option<PathBuf>,
     /// The light-transport algorithm.
-    #[arg(long, value_enum, default_value = "pt")]
+    #[arg(long, value_enum, default_value = INTEGRATORS[0].name)]
     integrator: IntegratorChoice,
     /// Samples per pixel (for MCMC integrators: mutations per pixel) [default: 16].
     #[arg(long, visible_alias = "mutations-per-pixel", allow_negative_numbers = true, value_name = "N", conflicts_with = "time",
@@ -149,7 +150,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
     RenderSettings {
         width: args.width,
         height: args.height,
-        integrator: args.integrator.kind,
+        integrator: args.integrator.info.kind,
         budget,
         threads,
         seed: args.seed,
@@ -208,7 +209,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
         scene_name(&args),
         settings.width,
         settings.height,
-        args.integrator.name,
+        args.integrator.info.name,
         settings.threads
     );
     let output = session::render(&scene, &settings, &progress, &CANCEL);
@@ -217,11 +218,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
     for note in &output.notes {
         eprintln!("note: {note}");
     }
-    if args.strategy_images
-        && !settings
-            .integrator
-            .eq(&render::session::IntegratorKind::Bdpt)
-    {
+    if args.strategy_images && settings.integrator != IntegratorKind::Bdpt {
         eprintln!("warning: --strategy-images applies to --integrator bdpt only; ignored");
     }
     for ((s, t), img) in &output.strategy_images {
@@ -267,7 +264,7 @@ fn print_summary(args: &RenderArgs, settings: &RenderSettings, output: &RenderOu
     println!("scene       {}", scene_name(args));
     println!(
         "integrator  {} ({}x{}, max depth {}, seed {}, {} threads)",
-        args.integrator.name,
+        args.integrator.info.name,
         settings.width,
         settings.height,
         settings.max_depth,

@@ -151,6 +151,17 @@ where
         &self.controller
     }
 
+    /// Mutable access to the controller.
+    pub fn controller_mut(&mut self) -> &mut C {
+        &mut self.controller
+    }
+
+    /// The kernel and the controller, both mutable (e.g. for a controller that tunes the
+    /// kernel from statistics pooled over many chains).
+    pub fn kernel_and_controller_mut(&mut self) -> (&mut K, &mut C) {
+        (&mut self.kernel, &mut self.controller)
+    }
+
     /// Acceptance statistics so far.
     pub fn stats(&self) -> &AcceptanceStats {
         &self.stats

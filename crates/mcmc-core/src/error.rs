@@ -34,6 +34,17 @@ pub enum McmcError {
         /// A human-readable description of the allowed range.
         allowed: &'static str,
     },
+    /// A setting is outside its allowed range (value not a number, e.g. a list or a name; also
+    /// what other crates' parameter errors convert into).
+    #[error("setting `{name}` = {value} is outside its allowed range {allowed}")]
+    InvalidSetting {
+        /// Setting name.
+        name: &'static str,
+        /// The rejected value, formatted.
+        value: String,
+        /// A human-readable description of the allowed range.
+        allowed: &'static str,
+    },
 }
 
 impl McmcError {

@@ -50,11 +50,19 @@ impl StepInfo {
 /// Receives every sample a step evaluated, with its expected-value weight, and the step report.
 ///
 /// Expected-value splatting (Veach's thesis, section 11.3.3): for MH the current state gets
-/// weight `1 - a` and the candidate `a`; for delayed rejection x, y and z get the weights of the
-/// DR paper's Fig. 8. The weights of one step sum to 1. The kernel does not know whether the
-/// observer splats to a film, collects statistics or does nothing (`()`).
+/// weight `1 - a` and the candidate `a`. The kernel does not know whether the observer splats
+/// to a film, collects statistics or does nothing (`()`).
+///
+/// **The contract** every kernel keeps: for any function `h` of the state, the expected splat
+/// of one step from `x`, `E[sum_i w_i h(s_i) | X = x]` over the samples `s_i` the step
+/// reports with weights `w_i`, equals `E[h(X') | X = x]`, the expectation of `h` at the next
+/// state. Summed over a chain this makes the splatted image an unbiased estimate of what the
+/// chain's states would give, with less variance. MH's weights `(1 - a, a)` sum to 1 at every
+/// step; delayed rejection's unbiased three-point scheme sums to 1 only in expectation, and its
+/// weights may leave `[0, 1]`. The harness checks the contract directly
+/// (`testing`: a splat-weighted histogram of one step from exact starts against `pi`).
 pub trait Observer<S, P> {
-    /// `sample` contributes with `weight` (in `[0, 1]`) to this step's estimate.
+    /// `sample` contributes with `weight` to this step's estimate (see the contract above).
     fn splat(&mut self, sample: &Sample<S, P>, weight: f64) {
         let _ = (sample, weight);
     }

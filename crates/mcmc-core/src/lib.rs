@@ -34,7 +34,9 @@ mod error;
 mod kernel;
 mod mh;
 pub mod partition;
+mod progress;
 pub mod proposal;
+pub mod render_loop;
 pub mod seed;
 pub mod stats;
 mod target;
@@ -44,6 +46,13 @@ pub mod torus;
 pub mod toy;
 
 pub use chain::Chain;
+
+/// The `rand` crate mcmc-core is built against, re-exported so users need not pin a version.
+pub use rand;
+
+/// The random number generator of every chain a [`render_loop::RenderLoop`] runs (PCG64,
+/// seeded from (seed, chain index)); re-exported so users need not depend on `rand_pcg`.
+pub type ChainRng = rand_pcg::Pcg64;
 pub use controller::{Controller, NoAdaptation};
 pub use error::McmcError;
 pub use kernel::{
@@ -51,6 +60,7 @@ pub use kernel::{
     MAX_STAGES,
 };
 pub use mh::Mh;
+pub use progress::{NoProgress, Progress};
 pub use partition::Partition;
 pub use proposal::{GaussianRandomWalk, Mixture, Proposal, Proposed};
 pub use target::{

@@ -5,7 +5,7 @@ use rand::{Rng, RngExt};
 use crate::controller::{LargeStepTunable, RegionalTunable, ScaleTunable};
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
-use crate::target::{SampleOf, Target};
+use crate::target::{Point, SampleOf, Target};
 
 /// Metropolis-Hastings (Metropolis et al. 1953; Hastings 1970; DR paper eq. 3):
 /// propose `y ~ q(. | x)` and accept with `a = min(1, pi(y) q(y->x) / (pi(x) q(x->y)))`.
@@ -14,6 +14,9 @@ use crate::target::{SampleOf, Target};
 /// density is never accepted; an invalid candidate is rejected without evaluating the target;
 /// a NaN density or Hastings term is rejected and flagged (`StepInfo::non_finite`), and the
 /// [`crate::Chain`] turns it into an error.
+///
+/// After a rejection the kernel calls [`crate::Point::absorb_rejected`] on the current state
+/// (lazily materialised states keep what the candidate's evaluation drew of them).
 ///
 /// Random numbers per step, in order: the proposal's, then one uniform for the decision
 /// (drawn only when `0 < a < 1`).
@@ -64,6 +67,8 @@ where
     if accept {
         std::mem::swap(current, y);
         info.accepted_stage = 1;
+    } else if matches!(proposed, Proposed::Move { .. }) {
+        current.state.absorb_rejected(&y.state);
     }
     observer.step(&info);
     info

@@ -1,11 +1,38 @@
 //! What is sampled: unnormalised target densities and their evaluated samples.
 
-/// A state of a Markov chain. Any cloneable, sendable value works; `Clone::clone_from` is used
-/// to copy states into preallocated buffers, so states that own heap memory (`Vec<f64>`, a
-/// primary-sample-space vector) are reused without allocating per step.
-pub trait Point: Clone + Send + std::fmt::Debug {}
+/// A state of a Markov chain. `Clone::clone_from` is used to copy states into preallocated
+/// buffers, so states that own heap memory (`Vec<f64>`, a primary-sample-space vector) are
+/// reused without allocating per step.
+///
+/// Implemented for `f64`, `Vec<f64>`, `Vec<f32>` and `[f64; N]`; a state type of your own
+/// needs one line, `impl mcmc_core::Point for MyState {}`, unless it is *lazily
+/// materialised* (it draws parts of itself while a target reads it, like `pss::PssState`):
+/// then it implements [`Point::absorb_rejected`].
+///
+/// # Example
+/// ```
+/// #[derive(Clone, Debug)]
+/// struct Path { vertices: Vec<[f64; 3]> }
+/// impl mcmc_core::Point for Path {}
+/// ```
+pub trait Point: Clone + Send + std::fmt::Debug {
+    /// Called by every kernel on the current state right after a candidate proposed from it
+    /// was evaluated and rejected, before anything else is proposed from it.
+    ///
+    /// A lazily materialised state copies from `rejected` the values of *its own* coordinates
+    /// that the candidate's evaluation drew, so that the current state does not change with the
+    /// candidate's fate (what makes lazy primary-sample-space mutation exact: see
+    /// `pss::PssState`). The default does nothing, which is right for every state that is
+    /// fully defined when it is created.
+    fn absorb_rejected(&mut self, rejected: &Self) {
+        let _ = rejected;
+    }
+}
 
-impl<T: Clone + Send + std::fmt::Debug> Point for T {}
+impl Point for f64 {}
+impl Point for Vec<f64> {}
+impl Point for Vec<f32> {}
+impl<const N: usize> Point for [f64; N] {}
 
 /// An unnormalised density over a state space: the thing a Markov chain samples.
 ///

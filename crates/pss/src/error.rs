@@ -17,3 +17,21 @@ pub enum PssError {
         allowed: &'static str,
     },
 }
+
+/// One error path across the crates: a `pss` error is an `mcmc-core` error (a parameter out
+/// of range), so code that builds PSS proposals and runs chains can use `?` on both.
+impl From<PssError> for mcmc_core::McmcError {
+    fn from(e: PssError) -> Self {
+        match e {
+            PssError::InvalidParameter {
+                name,
+                value,
+                allowed,
+            } => mcmc_core::McmcError::InvalidSetting {
+                name,
+                value,
+                allowed,
+            },
+        }
+    }
+}

@@ -33,12 +33,16 @@
 //! ```
 
 mod error;
+mod fresh;
 mod mutation;
 pub mod noise;
 mod proposal;
 mod state;
+#[cfg(feature = "testing")]
+pub mod testing;
 
 pub use error::PssError;
+pub use fresh::FreshPss;
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
 pub use proposal::{LargeStep, PssmltProposal, SmallStep, ALL_STREAMS};
 pub use state::{Pending, PssState, MAX_STREAMS};

@@ -126,6 +126,26 @@ impl PssmltProposal {
         Ok(Self { small, p_large })
     }
 
+    /// Kelemen et al. 2002's exponential small step (`s1 = 1/1024`, `s2 = 1/64`, section 4.1)
+    /// with large-step probability 0.3 (the value of pbrt-v3 and of the DRMLT and Langevin
+    /// authors' implementations).
+    #[must_use]
+    pub const fn kelemen2002() -> Self {
+        Self {
+            small: SmallStep::new(SmallMutation::Kelemen(crate::KelemenParams::kelemen2002())),
+            p_large: 0.3,
+        }
+    }
+
+    /// pbrt-v3's MLT: Gaussian small steps with `sigma = 0.01`, large-step probability 0.3.
+    #[must_use]
+    pub const fn pbrt_v3() -> Self {
+        Self {
+            small: SmallStep::new(SmallMutation::Gaussian { sigma: 0.01 }),
+            p_large: 0.3,
+        }
+    }
+
     /// The large-step probability.
     #[must_use]
     pub fn p_large(&self) -> f64 {

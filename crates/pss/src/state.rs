@@ -31,36 +31,73 @@ pub enum Pending {
 /// `s + streams * k` (pbrt-v3's interleaving), so each stream grows independently.
 ///
 /// **Lazy mutation** (pbrt's `MLTSampler`, after Kelemen et al. 2002, section 5): a proposal
-/// does not touch the coordinates; it increments the state's per-stream iteration counter and
-/// records the mutation ([`Pending`]) and a fresh noise key. When the target reads coordinate
-/// `i`, the coordinate is brought up to date: if it predates the last large step it becomes a
-/// fresh uniform; then it receives one small perturbation per iteration it missed. A
-/// coordinate nobody reads is never mutated, so the state is as long as the longest path it
-/// has built, and evaluating a path costs only what the path consumes. All random numbers are
-/// counter-based ([`crate::noise`]), so the result does not depend on reading order.
+/// does not touch the coordinates; it increments the candidate's per-stream iteration counter
+/// and records the mutation ([`Pending`]) and a fresh noise key. When the target reads
+/// coordinate `i`, the coordinate is brought up to date. A coordinate nobody reads is never
+/// mutated, so the state is as long as the longest path it has built, and evaluating a path
+/// costs only what the path consumes. All random numbers are counter-based
+/// ([`crate::noise`]), so the result does not depend on reading order.
+///
+/// # Why lazy equals eager, rejections included
+///
+/// Eagerly, every proposal perturbs every coordinate. Think of the current state `x` as that
+/// eager vector. A coordinate `i` that no evaluation has read since it was last stored (its
+/// *stamp*) has influenced no accept/reject decision since then, so, given everything the
+/// chain has decided, its eager value is distributed as the stored value perturbed by the
+/// `m` small steps accepted since (a fresh uniform if a large step intervened), independently
+/// of everything else. By the principle of deferred decisions it may be drawn from that law at
+/// the moment it is first needed — **provided the draw is then kept**. This type keeps it:
+///
+/// 1. A small-step candidate `y` that reads a stale coordinate first draws the *parent's*
+///    value `x_i` (the catch-up, from a key derived from the candidate's key), records
+///    `(i, x_i)` in an observation log, then applies its own perturbation to it.
+/// 2. If `y` is accepted, `y` holds its own values. If `y` is rejected, the kernel calls
+///    [`mcmc_core::Point::absorb_rejected`] on `x`, which stores the logged `x_i` in `x` with
+///    `x`'s current stamp: from then on every candidate proposed from `x` sees the same `x_i`,
+///    exactly as with an eager `x`, and `x`'s unread coordinates never change while the chain
+///    stays at `x`.
+/// 3. A large-step candidate ignores the parent (a fresh uniform), so it observes nothing.
+///
+/// Each coordinate of `x` is thus drawn once, from its correct conditional law, at its first
+/// observation, and is fixed afterwards: the lazy chain and the eager chain have the same law
+/// (docs/methods/pssmlt-mmlt.md has the longer argument). pbrt's `MLTSampler` instead discards
+/// the caught-up values on rejection, so the current state's unread coordinates are re-drawn at
+/// every proposal until one is accepted: a selection bias whenever the set of coordinates the
+/// target reads depends on the state (Russian roulette, varying path length, MMLT strategies).
+///
+/// The catch-up uses the candidate's small-step kernel for all `m` missed steps. With a fixed
+/// kernel this is exact; if a controller changes the kernel between steps (scale adaptation),
+/// the missed steps are drawn with the current kernel rather than the historical ones (our
+/// documented reading; the difference vanishes under diminishing adaptation).
 ///
 /// Copying a state (`clone_from`) reuses its buffers: the chain's backup/restore on rejection
 /// is "keep the old state", and acceptance is a swap.
-///
-/// Missed iterations are caught up with the *current* small-step kernel; if a controller
-/// changes the kernel between steps, catch-up differs slightly from eager mutation with the
-/// historical kernels (documented reading; the stationary distribution of unread coordinates
-/// is uniform either way).
 #[derive(Debug, PartialEq)]
 pub struct PssState {
     values: Vec<f64>,
-    /// Per coordinate: the stream iteration at which it was last brought up to date.
+    /// Per coordinate: the stream iteration at which it was last brought up to date
+    /// (`NEVER` if never read).
     stamps: Vec<u64>,
     streams: usize,
-    /// Per stream: number of accepted mutations applied to that stream.
+    /// Per stream: number of mutations applied to that stream along this state's lineage.
     iteration: [u64; MAX_STREAMS],
     /// Per stream: iteration of the last large step.
     last_large: [u64; MAX_STREAMS],
     pending: Pending,
     key: u64,
+    /// The key of the state this one was proposed from (to check `absorb_rejected` calls).
+    parent_key: u64,
+    /// Parent values this candidate's evaluation drew (index, value): see the type docs.
+    observed: Vec<(usize, f64)>,
     cursor: [usize; MAX_STREAMS],
     stream: usize,
 }
+
+/// Stamp of a coordinate that was never read.
+const NEVER: u64 = u64::MAX;
+
+/// Salt that separates the catch-up draws of a candidate from its own perturbation draws.
+const CATCH_UP_SALT: u64 = 0x6361_7463_6875_7021;
 
 impl Clone for PssState {
     fn clone(&self) -> Self {
@@ -70,7 +107,8 @@ impl Clone for PssState {
     }
 
     /// Copies `source` into `self` reusing `self`'s buffers: no allocation per proposal once
-    /// the buffers have grown (`derive(Clone)` would allocate new vectors every time).
+    /// the buffers have grown (`derive(Clone)` would allocate new vectors every time). The
+    /// observation log is copied too (it is empty except on a candidate being evaluated).
     fn clone_from(&mut self, source: &Self) {
         self.values.clone_from(&source.values);
         self.stamps.clone_from(&source.stamps);
@@ -79,8 +117,33 @@ impl Clone for PssState {
         self.last_large = source.last_large;
         self.pending = source.pending;
         self.key = source.key;
+        self.parent_key = source.parent_key;
+        self.observed.clone_from(&source.observed);
         self.cursor = source.cursor;
         self.stream = source.stream;
+    }
+}
+
+impl mcmc_core::Point for PssState {
+    /// Keeps the values of `self`'s coordinates that the rejected candidate's evaluation drew
+    /// (its catch-up of stale coordinates), so that they do not change with the candidate's
+    /// fate: the step that makes lazy mutation exact (see the type docs).
+    fn absorb_rejected(&mut self, rejected: &Self) {
+        if rejected.parent_key != self.key || rejected.streams != self.streams {
+            debug_assert!(
+                rejected.observed.is_empty(),
+                "absorb_rejected: the candidate was not proposed from this state"
+            );
+            return;
+        }
+        for &(index, value) in &rejected.observed {
+            if index >= self.values.len() {
+                self.values.resize(index + 1, 0.0);
+                self.stamps.resize(index + 1, NEVER);
+            }
+            self.values[index] = value;
+            self.stamps[index] = self.iteration[index % self.streams];
+        }
     }
 }
 
@@ -98,13 +161,31 @@ impl PssState {
             last_large: [0; MAX_STREAMS],
             pending: Pending::None,
             key,
+            parent_key: key,
+            observed: Vec::new(),
             cursor: [0; MAX_STREAMS],
             stream: 0,
         }
     }
 
-    /// A fully materialised single-stream state with the given coordinates (each in [0, 1)):
-    /// for tests and for targets of fixed dimension.
+    /// Turns `self` into `PssState::new(streams, key)` keeping its buffers (no allocation once
+    /// they have grown): how a render loop's bootstrap reuses one state per thread.
+    pub fn reset(&mut self, streams: usize, key: u64) {
+        self.values.clear();
+        self.stamps.clear();
+        self.observed.clear();
+        self.streams = streams.clamp(1, MAX_STREAMS);
+        self.iteration = [0; MAX_STREAMS];
+        self.last_large = [0; MAX_STREAMS];
+        self.pending = Pending::None;
+        self.key = key;
+        self.parent_key = key;
+        self.cursor = [0; MAX_STREAMS];
+        self.stream = 0;
+    }
+
+    /// A fully materialised single-stream state with the given coordinates (each wrapped
+    /// into [0, 1)): for tests and for targets of fixed dimension.
     #[must_use]
     pub fn from_values(values: &[f64]) -> Self {
         let mut s = Self::new(1, 0);
@@ -144,9 +225,15 @@ impl PssState {
         self.pending
     }
 
+    /// The noise key of the mutation that produced this state (or of the fresh state).
+    #[must_use]
+    pub fn key(&self) -> u64 {
+        self.key
+    }
+
     /// Attaches a mutation for the next evaluation: increments the iteration of the mutated
     /// streams (all streams for a large step) and sets the noise key. Called by proposals on
-    /// the candidate (a copy of the current state).
+    /// the candidate (a copy of the current state); clears the candidate's observation log.
     pub fn set_pending(&mut self, pending: Pending, key: u64) {
         match pending {
             Pending::None => {}
@@ -165,7 +252,9 @@ impl PssState {
             }
         }
         self.pending = pending;
+        self.parent_key = self.key;
         self.key = key;
+        self.observed.clear();
     }
 
     /// Rewinds all stream cursors; targets call this before reading a path.
@@ -193,41 +282,72 @@ impl PssState {
     #[inline]
     pub fn get(&mut self, index: usize) -> f64 {
         if index >= self.values.len() {
-            // Coordinates never read before are fresh uniforms at the time of the last large
-            // step; they then need the small steps since.
-            let old = self.values.len();
             self.values.resize(index + 1, 0.0);
-            self.stamps.resize(index + 1, u64::MAX);
-            for i in old..=index {
-                self.stamps[i] = u64::MAX;
-            }
+            self.stamps.resize(index + 1, NEVER);
         }
         let stream = index % self.streams;
         let now = self.iteration[stream];
-        let stamp = self.stamps[index];
-        if stamp == now {
+        if self.stamps[index] == now {
             return self.values[index];
         }
-        let key = self.key;
-        let coordinate = index as u64;
-        let value = if stamp == u64::MAX || stamp < self.last_large[stream] {
-            // Never read, or last read before the latest large step: the large step made it a
-            // fresh uniform, and perturbing a uniform on the circle leaves it uniform, so the
-            // small steps since need not be applied.
-            uniform(key, coordinate, u64::MAX)
-        } else {
-            match self.pending {
-                Pending::Small { mutation, .. } => {
-                    mutation.apply(self.values[index], now - stamp, |d| {
-                        uniform(key, coordinate, d)
-                    })
-                }
-                _ => self.values[index],
-            }
-        };
+        let value = self.catch_up(index, stream, now);
         self.values[index] = value;
         self.stamps[index] = now;
         value
+    }
+
+    /// The up-to-date value of a stale coordinate (see the type docs for why this is exact).
+    #[cold]
+    fn catch_up(&mut self, index: usize, stream: usize, now: u64) -> f64 {
+        let stamp = self.stamps[index];
+        let coordinate = index as u64;
+        // Last read before the latest large step of this stream (or never): the large step
+        // made it a fresh uniform, and perturbing a uniform on the circle leaves it uniform.
+        let refreshed = stamp == NEVER || stamp < self.last_large[stream];
+        match self.pending {
+            Pending::Large => uniform(self.key, coordinate, u64::MAX),
+            Pending::None => {
+                // A state nobody mutated (fresh from a key): a deferred draw of its own value.
+                if refreshed {
+                    uniform(self.key, coordinate, u64::MAX)
+                } else {
+                    self.values[index]
+                }
+            }
+            Pending::Small {
+                mutation,
+                stream_mask,
+            } => {
+                let mutated = stream_mask & (1 << stream) != 0;
+                let parent_now = if mutated { now - 1 } else { now };
+                // The parent's value of this coordinate, drawn now from its law given the
+                // chain's history (deferred decision), and logged so that a rejection keeps it.
+                let parent = if refreshed {
+                    let k = mcmc_core::seed::mix64(self.key ^ CATCH_UP_SALT);
+                    Some(uniform(k, coordinate, u64::MAX))
+                } else if stamp < parent_now {
+                    let k = mcmc_core::seed::mix64(self.key ^ CATCH_UP_SALT);
+                    Some(mutation.apply(self.values[index], parent_now - stamp, |d| {
+                        uniform(k, coordinate, d)
+                    }))
+                } else {
+                    None // stored and up to date in the parent: nothing new was observed
+                };
+                let base = match parent {
+                    Some(v) => {
+                        self.observed.push((index, v));
+                        v
+                    }
+                    None => self.values[index],
+                };
+                if mutated {
+                    let key = self.key;
+                    mutation.apply(base, 1, |d| uniform(key, coordinate, d))
+                } else {
+                    base
+                }
+            }
+        }
     }
 
     /// Brings every stored coordinate up to date (eager evaluation of the pending mutation).

@@ -7,9 +7,9 @@
 //! statistic and p-value.
 //!
 //! # Setup
-//! A toy target on `[0, 1)^d` becomes a PSS target through [`OnPss`]: it reads the first `d`
-//! primary samples (`begin`, then `next_sample` d times) and returns the toy's normalised log
-//! density. Targets: (a) the 2-D wrapped-Gaussian mixture whose modes straddle both seams
+//! A toy target on `[0, 1)^d` becomes a PSS target through `pss::testing::OnPss`: it reads
+//! the first `d` primary samples (`begin`, then `next_sample` d times) and returns the toy's
+//! normalised log density. Targets: (a) the 2-D wrapped-Gaussian mixture whose modes straddle both seams
 //! ([`TorusMixture::across_seam`]), (b) the 1-D piecewise-constant density with zero-density
 //! holes ([`PiecewiseConstant::with_holes`]), (c) a smooth 1-D wrapped-normal mixture with 70%
 //! of its mass in a mode centred at 0.985 ([`SeamBump`]). Kernels: MH with the Kelemen small
@@ -53,14 +53,16 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use mcmc_core::testing::{
     assert_finite_state_balance, assert_hastings_consistent, assert_path_balance,
     assert_symmetric_proposal, chi_square_test, finite_state_check, grid_centres, sidak_alpha,
-    stationarity_test, ChiSquareReport, FnBins, PairwiseParams, StationarityParams,
-    TreatedAsSymmetric, ALPHA,
+    ChiSquareReport, PairwiseParams, StationarityParams, TreatedAsSymmetric, ALPHA,
 };
 use mcmc_core::toy::special::normal_interval;
 use mcmc_core::toy::{wrapped_normal_pdf, Bins, PiecewiseConstant, TorusMixture, ToyTarget};
-use mcmc_core::{Chain, Kernel, Mh, NoAdaptation, Proposal, Proposed, Sample, Target};
+use mcmc_core::{Chain, Kernel, Mh, NoAdaptation, Proposal, Sample, Target};
 use proptest::prelude::*;
 use proptest::strategy::BoxedStrategy;
+use pss::testing::{
+    pss_stationarity_test, ClampedKelemen, Eager, ExactPssTarget, OnPss, RegionalGaussian,
+};
 use pss::{wrap, KelemenParams, LargeStep, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::{Rng, RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
@@ -99,24 +101,6 @@ const MAX_DIM: usize = 2;
 // ---------------------------------------------------------------------------------------------
 // Targets
 // ---------------------------------------------------------------------------------------------
-
-/// A toy target on `[0, 1)^d` evaluated on the first `d` primary samples of a PSS state.
-struct OnPss<T>(T);
-
-impl<T: ToyTarget> Target for OnPss<T> {
-    type State = PssState;
-    type Payload = ();
-
-    fn evaluate(&self, x: &mut PssState, _payload: &mut ()) -> f64 {
-        let d = self.0.dim();
-        let mut u = [0.0; MAX_DIM];
-        x.begin();
-        for v in &mut u[..d] {
-            *v = x.next_sample();
-        }
-        self.0.log_density(&u[..d])
-    }
-}
 
 /// (c) A smooth density on the circle with most of its mass across the seam:
 /// `pi(x) = sum_k w_k sum_{m in Z} N(x + m; mu_k, sd_k^2)` on `[0, 1)` with the components of
@@ -214,15 +198,15 @@ impl ToyTarget for SeamBump {
 }
 
 fn torus() -> OnPss<TorusMixture> {
-    OnPss(TorusMixture::across_seam())
+    OnPss::new(TorusMixture::across_seam()).unwrap()
 }
 
 fn holes() -> OnPss<PiecewiseConstant> {
-    OnPss(PiecewiseConstant::with_holes())
+    OnPss::new(PiecewiseConstant::with_holes()).unwrap()
 }
 
 fn seam() -> OnPss<SeamBump> {
-    OnPss(SeamBump)
+    OnPss::new(SeamBump).unwrap()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -260,40 +244,6 @@ fn displacements(m: Option<SmallMutation>) -> (f64, f64) {
         Some(SmallMutation::Kelemen(KelemenParams { s1, s2 })) => (0.9 * s1, 1.1 * s2),
         Some(SmallMutation::Gaussian { sigma }) => (0.01 * sigma, (3.0 * sigma).min(0.5)),
         None => (1e-3, 0.5),
-    }
-}
-
-/// Forces the candidate's lazy mutation right after `propose`, so that the proposal checks see
-/// the candidate's actual coordinates. (`SmallStep::propose` only attaches the mutation; the
-/// coordinates change when read, so `log_q(x, y)` on an unread candidate reads `x`'s values.)
-#[derive(Clone, Debug)]
-struct Eager<P>(P);
-
-impl<P: Proposal<PssState>> Proposal<PssState> for Eager<P> {
-    fn propose<R: Rng + ?Sized>(&self, x: &PssState, y: &mut PssState, rng: &mut R) -> Proposed {
-        let proposed = self.0.propose(x, y, rng);
-        y.materialize();
-        proposed
-    }
-
-    fn log_q(&self, from: &PssState, to: &PssState) -> f64 {
-        self.0.log_q(from, to)
-    }
-
-    fn is_symmetric(&self) -> bool {
-        self.0.is_symmetric()
-    }
-
-    fn num_components(&self) -> usize {
-        self.0.num_components()
-    }
-
-    fn log_q_component(&self, j: usize, from: &PssState, to: &PssState) -> f64 {
-        self.0.log_q_component(j, from, to)
-    }
-
-    fn log_hastings(&self, j: usize, x: &PssState, y: &PssState) -> f64 {
-        self.0.log_hastings(j, x, y)
     }
 }
 
@@ -368,7 +318,7 @@ where
         min_informative: MIN_INFORMATIVE,
         ..PairwiseParams::with_seed(seed)
     };
-    let r = assert_path_balance(target, kernel, pairs(target.0.dim(), range), &params);
+    let r = assert_path_balance(target, kernel, pairs(target.toy().dim(), range), &params);
     eprintln!(
         "{what}: pairwise balance on {}/{} informative pairs (worst |log flow difference| {:.1e})",
         r.informative, r.cases, r.worst_log_difference
@@ -418,7 +368,7 @@ where
 }
 
 fn grid_states<T: ToyTarget>(target: &OnPss<T>, cells: &[usize]) -> (Vec<PssState>, f64) {
-    let (lo, hi) = target.0.bounding_box();
+    let (lo, hi) = target.toy().bounding_box();
     let (centres, volume) = grid_centres(&lo, &hi, cells);
     let states = centres.iter().map(|c| PssState::from_values(c)).collect();
     (states, volume)
@@ -426,23 +376,15 @@ fn grid_states<T: ToyTarget>(target: &OnPss<T>, cells: &[usize]) -> (Vec<PssStat
 
 /// Stationarity from exact starts: `PssState::from_values(exact draw)`, then [`STEPS`] lazy
 /// kernel steps; the final states' first `d` coordinates are binned with the toy's exact
-/// bins.
+/// bins (`pss::testing::OnPss` as an `ExactPssTarget`).
 fn stationarity<T, K>(target: &OnPss<T>, kernel: &K, seed: u64) -> ChiSquareReport
 where
     T: ToyTarget,
     K: Kernel<OnPss<T>> + Clone,
 {
-    let bins = target.0.bins();
-    let d = target.0.dim();
-    let pss_bins = FnBins {
-        probabilities: bins.probabilities().to_vec(),
-        bin_of: move |x: &PssState| bins.bin_of(&x.raw_values()[..d]),
-    };
-    stationarity_test(
+    pss_stationarity_test(
         target,
         kernel,
-        |rng| PssState::from_values(&target.0.sample_exact(rng)),
-        &pss_bins,
         &StationarityParams::new(STARTS, STEPS, seed),
     )
 }
@@ -456,7 +398,7 @@ where
     K: Kernel<OnPss<T>> + Clone,
 {
     let mut rng = Pcg64::seed_from_u64(seed);
-    let start = PssState::from_values(&target.0.sample_exact(&mut rng));
+    let start = target.sample_exact(&mut rng);
     let mut chain = Chain::new(target, kernel.clone(), NoAdaptation, rng, start).unwrap();
     chain.run(2000, &mut ()).unwrap();
     let rate = chain.stats().acceptance_rate();
@@ -760,49 +702,13 @@ fn assert_fails(what: &str, needle: &str, f: impl FnOnce()) {
     );
 }
 
-/// An honest *asymmetric* PSS proposal: the wrapped Gaussian small step with a sigma that
-/// depends on the current state's first coordinate (narrow on `[0, 1/2)`, wide on
-/// `[1/2, 1)`: a regional scale), reporting its exact Hastings term. The candidate is
-/// materialised in `propose`, since the Hastings term needs its coordinates.
-#[derive(Clone, Copy, Debug)]
-struct RegionalGaussian {
-    narrow: f64,
-    wide: f64,
-}
-
-impl RegionalGaussian {
-    fn step_at(&self, x: &PssState) -> SmallStep {
-        let sigma = if x.raw_values()[0] < 0.5 {
-            self.narrow
-        } else {
-            self.wide
-        };
-        SmallStep::new(SmallMutation::Gaussian { sigma })
-    }
-}
-
-impl Proposal<PssState> for RegionalGaussian {
-    fn propose<R: Rng + ?Sized>(&self, x: &PssState, y: &mut PssState, rng: &mut R) -> Proposed {
-        self.step_at(x).propose(x, y, rng);
-        y.materialize();
-        Proposed::hastings(self.log_q(y, x) - self.log_q(x, y))
-    }
-
-    fn log_q(&self, from: &PssState, to: &PssState) -> f64 {
-        self.step_at(from).log_q(from, to)
-    }
-}
-
 /// The regional Gaussian with its Hastings term passes every check on the seam target; the
 /// same proposal treated as symmetric (the "Hastings term of the wrong sigma" bug: the
 /// reverse density uses the forward move's sigma, so the ratio is taken as 1) fails them all.
 #[test]
 fn regional_gaussian_needs_its_hastings_term() {
     let target = seam();
-    let honest = RegionalGaussian {
-        narrow: 0.03,
-        wide: 0.2,
-    };
+    let honest = RegionalGaussian::new(0.03, 0.2).unwrap();
     let range = (3e-4, 0.5);
     let what = "seam bump / regional Gaussian (0.03 | 0.2)";
     assert_hastings_consistent(&honest, states(1), &PairwiseParams::with_seed(81));
@@ -836,39 +742,6 @@ fn regional_gaussian_needs_its_hastings_term() {
     assert!(report.p_value < OVERWHELMING, "{report}");
 }
 
-/// A Kelemen-like step that does not wrap around the torus but clamps at the boundary
-/// (`[0, 1 - 2^-53]`) while claiming the symmetric torus density. Its candidates are fully
-/// materialised states.
-#[derive(Clone, Copy, Debug)]
-struct ClampedKelemen(KelemenParams);
-
-impl Proposal<PssState> for ClampedKelemen {
-    fn propose<R: Rng + ?Sized>(&self, x: &PssState, y: &mut PssState, rng: &mut R) -> Proposed {
-        let KelemenParams { s1, s2 } = self.0;
-        let values: Vec<f64> = x
-            .raw_values()
-            .iter()
-            .map(|&v| {
-                let d = s2 * ((s1 / s2).ln() * rng.random::<f64>()).exp();
-                let moved = if rng.random::<bool>() { v + d } else { v - d };
-                // The bug: clamp instead of wrap.
-                moved.clamp(0.0, 1.0 - f64::EPSILON / 2.0)
-            })
-            .collect();
-        *y = PssState::from_values(&values);
-        Proposed::symmetric()
-    }
-
-    fn log_q(&self, from: &PssState, to: &PssState) -> f64 {
-        // The claim: the wrapped Kelemen density.
-        SmallStep::new(SmallMutation::Kelemen(self.0)).log_q(from, to)
-    }
-
-    fn is_symmetric(&self) -> bool {
-        true
-    }
-}
-
 /// The clamping step piles mass onto the boundary points and never crosses the seam. The
 /// correct wrap-around kernel with the same parameters passes on the same target
 /// (`kelemen_wide_passes`, "seam bump"); the clamped one fails stationarity. Its flows are
@@ -878,7 +751,7 @@ impl Proposal<PssState> for ClampedKelemen {
 #[test]
 fn clamped_kelemen_fails_stationarity() {
     let target = seam();
-    let bad = Mh::new(ClampedKelemen(KelemenParams { s1: 0.02, s2: 0.2 }));
+    let bad = Mh::new(ClampedKelemen::new(KelemenParams { s1: 0.02, s2: 0.2 }).unwrap());
     let (grid, volume) = grid_states(&target, &[32]);
     assert_finite_state_balance(&target, &bad, &grid, volume);
     let report = stationarity(&target, &bad, 91);

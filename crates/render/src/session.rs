@@ -22,29 +22,8 @@ use crate::scene::Scene;
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 
-/// Which light-transport algorithm renders the image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-#[non_exhaustive]
-pub enum IntegratorKind {
-    /// Unidirectional path tracing with next-event estimation and MIS.
-    #[default]
-    Pt,
-    /// Bidirectional path tracing with MIS over all strategies (the reference renderer).
-    Bdpt,
-    /// Primary-sample-space MLT over BDPT (Kelemen et al. 2002): all strategies per sample.
-    Pssmlt,
-    /// Multiplexed MLT (Hachisuka et al. 2014): one BDPT strategy per sample, path length
-    /// chosen per chain.
-    Mmlt,
-}
-
-impl IntegratorKind {
-    /// True for the Markov chain integrators (budget in mutations per pixel).
-    #[must_use]
-    pub const fn is_mcmc(self) -> bool {
-        matches!(self, IntegratorKind::Pssmlt | IntegratorKind::Mmlt)
-    }
-}
+/// Which integrator renders the image: defined with the integrator table.
+pub use crate::integrator::IntegratorKind;
 
 /// Settings of the Markov chain integrators (ignored by PT and BDPT).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,22 +103,8 @@ impl Default for RenderSettings {
     }
 }
 
-/// Receives progress reports from a running render (e.g. an indicatif bar).
-pub trait Progress: Sync {
-    /// The total amount of work, in the unit of [`Progress::advance`], once it is known.
-    fn set_total(&self, total: u64);
-    /// `done` more units of work finished.
-    fn advance(&self, done: u64);
-}
-
-/// A no-op [`Progress`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NoProgress;
-
-impl Progress for NoProgress {
-    fn set_total(&self, _total: u64) {}
-    fn advance(&self, _done: u64) {}
-}
+/// Progress reports of a running render: mcmc-core's trait (one copy across the crates).
+pub use mcmc_core::{NoProgress, Progress};
 
 /// The result of a render.
 #[derive(Clone, Debug)]
@@ -341,12 +306,13 @@ fn render_bidirectional(
         let targets = [PssmltTarget::new(scene, params, w, h)];
         mlt::render_mlt(&targets, kernel, &mlt_settings, progress, cancel)
     };
+    notes.extend(out.notes.iter().cloned());
     if let Some(msg) = &out.message {
         notes.push(msg.clone());
     } else {
         notes.push(format!(
-            "bootstrap: b = {:.6} from {} samples",
-            out.b, m.bootstrap_samples
+            "bootstrap: b = {:.6} (standard error {:.2e}) from {} samples",
+            out.b, out.b_standard_error, out.bootstrap_samples
         ));
         notes.push(format!(
             "acceptance rate {:.3} over {} mutations",

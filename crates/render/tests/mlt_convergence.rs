@@ -40,13 +40,13 @@ use std::sync::OnceLock;
 
 use common::{analytic_enclosure, enclosure_radiance, ENCLOSURE_ALBEDO, ENCLOSURE_LE};
 use glam::{Mat4, Vec3, Vec3A};
-use mcmc_core::Mh;
-use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
+use mcmc_core::{Mh, Target};
+use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
 use render::metrics::{relmse, RELMSE_EPSILON};
 use render::mlt::{
-    render_mlt, Bootstrap, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget,
+    render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget,
     PssmltTarget, PATH_STREAMS,
 };
 use render::scene::{CameraSpec, Material, Mesh, Scene};
@@ -336,17 +336,29 @@ fn mmlt_per_depth_bootstrap_matches_the_enclosure() {
         .iter()
         .enumerate()
     {
-        let bs = Bootstrap::run(target, PATH_STREAMS, n, 7_000 + d as u64);
-        let (m, se) = mean_se(&bs.weights);
+        let weights = bootstrap_weights(target, n, 7_000 + d as u64);
+        let (m, se) = mean_se(&weights);
         let exact = f64::from(ENCLOSURE_LE) * f64::from(ENCLOSURE_ALBEDO).powi(d as i32);
         let t = (m - exact) / se.max(f64::MIN_POSITIVE);
         eprintln!("enclosure MMLT depth {d}: b_d {m:.6} exact {exact:.6} se {se:.2e} t {t:.2}");
-        assert!(bs.weights.iter().all(|w| w.is_finite() && *w >= 0.0));
+        assert!(weights.iter().all(|w| w.is_finite() && *w >= 0.0));
         assert!(
             (m - exact).abs() < crit * se + 1e-6 * exact,
             "depth {d}: b_d {m} vs exact {exact}, se {se}, t {t}, critical {crit}"
         );
     }
+}
+
+/// `f(u)` of `n` independent primary-sample-space points (the render loop's bootstrap weights).
+fn bootstrap_weights<T: Target<State = PssState>>(target: &T, n: u64, seed: u64) -> Vec<f64> {
+    let mut payload = T::Payload::default();
+    (0..n)
+        .map(|i| {
+            let key = mcmc_core::render_loop::bootstrap_key(seed, 0, i);
+            let mut state = PssState::new(PATH_STREAMS, key);
+            target.evaluate(&mut state, &mut payload).exp()
+        })
+        .collect()
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -125,15 +125,22 @@ impl LargeStepStats {
 /// of `estimation_steps` steps (run with the kernel's initial large-step probability), then
 /// sets `p_l` by [`automatic_large_step_probability`] and freezes (finite adaptation: after
 /// the phase the chain is a fixed MH mixture, so stationarity is untouched).
+///
+/// Two modes: [`AutoLargeStep::new`] decides from this chain's own statistics;
+/// [`AutoLargeStep::pooled`] decides from the statistics of all chains of a render loop,
+/// pooled at round boundaries (`render_loop::SharedController`), which is what a renderer with
+/// many short chains wants (the paper estimates once per image).
 #[derive(Clone, Debug)]
 pub struct AutoLargeStep {
     estimation_steps: u64,
+    pooled: bool,
     stats: LargeStepStats,
+    unshared: LargeStepStats,
     estimate: Option<LargeStepEstimate>,
 }
 
 impl AutoLargeStep {
-    /// A controller whose estimation phase lasts `estimation_steps >= 1` steps.
+    /// A controller whose estimation phase lasts `estimation_steps >= 1` steps of this chain.
     pub fn new(estimation_steps: u64) -> Result<Self, McmcError> {
         McmcError::check_range(
             "estimation_steps",
@@ -144,9 +151,20 @@ impl AutoLargeStep {
         )?;
         Ok(Self {
             estimation_steps,
+            pooled: false,
             stats: LargeStepStats::default(),
+            unshared: LargeStepStats::default(),
             estimate: None,
         })
+    }
+
+    /// A controller whose estimation phase ends once the statistics pooled over all chains
+    /// of a render loop hold `total_estimation_steps >= 1` steps (checked at round
+    /// boundaries). Outside a render loop it never freezes by itself.
+    pub fn pooled(total_estimation_steps: u64) -> Result<Self, McmcError> {
+        let mut c = Self::new(total_estimation_steps)?;
+        c.pooled = true;
+        Ok(c)
     }
 
     /// The estimate, once the estimation phase is over.
@@ -155,10 +173,28 @@ impl AutoLargeStep {
         self.estimate
     }
 
-    /// The running statistics.
+    /// This chain's running statistics.
     #[must_use]
     pub fn stats(&self) -> &LargeStepStats {
         &self.stats
+    }
+
+    /// The statistics recorded since the last call (for pooling), reset.
+    pub fn take_unshared(&mut self) -> LargeStepStats {
+        std::mem::take(&mut self.unshared)
+    }
+
+    /// Pooled mode: freezes with the pooled estimate once `pooled` holds the estimation steps.
+    pub fn receive_pooled<K: LargeStepTunable + ?Sized>(
+        &mut self,
+        kernel: &mut K,
+        pooled: &LargeStepStats,
+    ) {
+        if self.pooled && self.estimate.is_none() && pooled.steps() >= self.estimation_steps {
+            let e = pooled.estimate();
+            kernel.set_large_step_probability(e.large_step_probability);
+            self.estimate = Some(e);
+        }
     }
 }
 
@@ -167,9 +203,11 @@ impl<K: LargeStepTunable + ?Sized, S> Controller<K, S> for AutoLargeStep {
         if self.estimate.is_some() {
             return;
         }
-        self.stats
-            .record(info, kernel.is_large_step(info.component));
-        if self.stats.steps() >= self.estimation_steps {
+        let is_large = kernel.is_large_step(info.component);
+        self.stats.record(info, is_large);
+        if self.pooled {
+            self.unshared.record(info, is_large);
+        } else if self.stats.steps() >= self.estimation_steps {
             let e = self.stats.estimate();
             kernel.set_large_step_probability(e.large_step_probability);
             self.estimate = Some(e);

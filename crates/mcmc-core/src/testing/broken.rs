@@ -9,7 +9,7 @@ use rand::Rng;
 
 use crate::kernel::{mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
-use crate::target::{SampleOf, Target};
+use crate::target::{Sample, SampleOf, Target};
 
 /// Wraps an asymmetric proposal and *claims* it is symmetric: `propose` reports a Hastings
 /// term of 0 and `is_symmetric` returns true, while `log_q` stays the true density.
@@ -179,5 +179,111 @@ impl<T: Target, K: Kernel<T>> Kernel<T> for ForcedAcceptance<K> {
 
     fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
         self.inner.reverse_path(target, path)
+    }
+}
+
+/// Forwards every splat except those of one sample (identified by address) to `inner`.
+struct SkipSample<'a, S, P, O: ?Sized> {
+    skip: *const Sample<S, P>,
+    inner: &'a mut O,
+}
+
+impl<S, P, O: Observer<S, P> + ?Sized> Observer<S, P> for SkipSample<'_, S, P, O> {
+    fn splat(&mut self, sample: &Sample<S, P>, weight: f64) {
+        if !std::ptr::eq(sample, self.skip) {
+            self.inner.splat(sample, weight);
+        }
+    }
+
+    fn step(&mut self, info: &StepInfo) {
+        self.inner.step(info);
+    }
+}
+
+/// Runs a kernel unchanged but hides the splat of the *current* state from the observer:
+/// for MH, the `1 - a` weight of Veach's expected-value splatting is dropped and only the
+/// candidate's `a` reaches the film.
+///
+/// The bug: an observer written as "splat the candidate with its acceptance probability",
+/// forgetting the rejected part. The chain's states are correct (stationarity tests pass);
+/// the image is too dark wherever candidates are rejected, which only the splat-weight check
+/// ([`super::splat_weight_test`]) sees. The current sample is recognised by its address, so
+/// this works for any kernel that splats the current sample in place (as [`crate::Mh`] does).
+#[derive(Clone, Debug)]
+pub struct WithoutCurrentSplat<K>(pub K);
+
+impl<T: Target, K: Kernel<T>> Kernel<T> for WithoutCurrentSplat<K> {
+    fn stages(&self) -> usize {
+        self.0.stages()
+    }
+
+    fn step<R, O>(
+        &mut self,
+        target: &T,
+        current: &mut SampleOf<T>,
+        scratch: &mut [SampleOf<T>],
+        rng: &mut R,
+        observer: &mut O,
+    ) -> StepInfo
+    where
+        R: Rng + ?Sized,
+        O: Observer<T::State, T::Payload> + ?Sized,
+    {
+        let mut hiding = SkipSample {
+            skip: std::ptr::from_ref(current),
+            inner: observer,
+        };
+        self.0.step(target, current, scratch, rng, &mut hiding)
+    }
+
+    fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
+        self.0.log_flow(target, path)
+    }
+
+    fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
+        self.0.reverse_path(target, path)
+    }
+}
+
+/// Runs a kernel with its splats hidden and instead splats the state the chain is in after
+/// the step, with weight 1: the plain (not expected-value) estimator.
+///
+/// For a correct kernel this keeps the observer contract (the expected splat from `x` is
+/// `E[h(X') | X = x]` by definition), so `SplatFinalState(Mh)` passes the splat-weight
+/// check. Around [`ForcedAcceptance`] it is the weighting of samplers that force-accept after
+/// rejections ("splat only the accepted state with weight 1"): one step then splats the
+/// candidate whatever its density, and the check fails.
+#[derive(Clone, Debug)]
+pub struct SplatFinalState<K>(pub K);
+
+impl<T: Target, K: Kernel<T>> Kernel<T> for SplatFinalState<K> {
+    fn stages(&self) -> usize {
+        self.0.stages()
+    }
+
+    fn step<R, O>(
+        &mut self,
+        target: &T,
+        current: &mut SampleOf<T>,
+        scratch: &mut [SampleOf<T>],
+        rng: &mut R,
+        observer: &mut O,
+    ) -> StepInfo
+    where
+        R: Rng + ?Sized,
+        O: Observer<T::State, T::Payload> + ?Sized,
+    {
+        let info = self.0.step(target, current, scratch, rng, &mut ());
+        observer.splat(current, 1.0);
+        observer.step(&info);
+        info
+    }
+
+    fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
+        self.0.log_flow(target, path)
+    }
+
+    fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
+        self.0.reverse_path(target, path)
     }
 }

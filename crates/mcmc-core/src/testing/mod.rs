@@ -1,6 +1,6 @@
 //! The correctness harness: checks that a kernel leaves its target invariant (feature `testing`).
 //!
-//! Three complementary checks (DESIGN.md, "Tests that prove the maths"), generic over any
+//! Four complementary checks (DESIGN.md, "Tests that prove the maths"), generic over any
 //! [`Target`](crate::Target) and [`Kernel`](crate::Kernel), so the `pss`, `pathspace` and
 //! `render` crates run them on their own kernels:
 //!
@@ -16,10 +16,17 @@
 //!    states against exact bin probabilities, with the statistic and p-value in a
 //!    [`ChiSquareReport`]; [`ChiSquareReport::assert_passes`] applies `alpha = 0.01` with a
 //!    Sidak correction for the number of tests in a file.
+//! 4. **Splat weights** ([`splat_weight_test`], [`toy_splat_weight_test`]): N exact starts,
+//!    ONE step each, the splat-weighted histogram of what the step reported to its
+//!    [`Observer`](crate::Observer) compared with `N pi(bin)` by Hotelling's statistic with
+//!    the covariance taken from the data (weights need not sum to 1): the observer contract
+//!    "the expected splat of one step from x equals `E[h(X') | X = x]`".
+//!
+//! Two-sample tests ([`chi_square_two_sample`], [`ks_two_sample`]) compare two samplers when the reference law is known only through a second sampler.
 //!
 //! [`broken`] holds negative controls (a lie about symmetry, a missing Hastings term, forced
-//! acceptance) that must *fail* these checks, and [`AsymmetricWalk`] / [`ThresholdSelection`]
-//! are test proposals with exact densities.
+//! acceptance, a dropped current-state splat) that must *fail* these checks, and
+//! [`AsymmetricWalk`] / [`ThresholdSelection`] are test proposals with exact densities.
 //!
 //! # Example
 //! ```
@@ -49,9 +56,13 @@ pub mod chi_square;
 mod finite_state;
 mod fixtures;
 mod pairwise;
+mod splat_weights;
 mod stationarity;
+mod two_sample;
 
-pub use broken::{ForcedAcceptance, MhWithoutHastings, TreatedAsSymmetric};
+pub use broken::{
+    ForcedAcceptance, MhWithoutHastings, SplatFinalState, TreatedAsSymmetric, WithoutCurrentSplat,
+};
 pub use chi_square::{chi_square_test, sidak_alpha, ChiSquareReport, ALPHA};
 pub use finite_state::{
     assert_finite_state_balance, finite_state_check, grid_centres, FiniteStateReport,
@@ -62,7 +73,12 @@ pub use pairwise::{
     assert_hastings_consistent, assert_pairwise_balance, assert_path_balance,
     assert_symmetric_proposal, log_values_agree, path_flows, PairwiseParams, PairwiseReport,
 };
+pub use splat_weights::{
+    splat_weight_test, toy_splat_weight_test, SplatParams, SplatWeightReport,
+    DETERMINISTIC_TOLERANCE, SPLAT_MIN_EXPECTED,
+};
 pub use stationarity::{
     chi_square_of_states, stationarity_test, toy_stationarity_test, ExactBins, FnBins,
     StationarityParams,
 };
+pub use two_sample::{chi_square_two_sample, kolmogorov_survival, ks_two_sample, KsReport};

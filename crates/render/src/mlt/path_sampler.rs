@@ -5,7 +5,9 @@ use glam::Vec2;
 use mcmc_core::Target;
 use pss::PssState;
 
-use super::splat::{luminance, Splat, SplatPayload};
+use mcmc_core::render_loop::{Splat, SplatPayload};
+
+use crate::image::luminance;
 use crate::bdpt::{self, BdptParams, BdptScratch};
 use crate::sampler::{Sampler, Stream};
 use crate::scene::Scene;

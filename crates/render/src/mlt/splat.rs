@@ -1,30 +1,5 @@
-//! Splats: the (raster position, RGB) contributions one path sample makes to the image, and
-//! the per-job accumulation buffers MCMC integrators splat into.
+//! A full-image f64 RGB accumulator (BDPT's light-tracing splats).
 
-use mcmc_core::{Observer, Sample};
-
-/// One contribution of a path sample to the image.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Splat {
-    /// Raster position in pixels, (0, 0) = top-left corner of the image.
-    pub raster: [f32; 2],
-    /// Radiance contribution (already MIS-weighted and divided by the sampling pdf).
-    pub rgb: [f32; 3],
-}
-
-/// Rec. 709 luminance of a linear RGB triple.
-#[inline]
-#[must_use]
-pub fn luminance(rgb: [f32; 3]) -> f32 {
-    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
-}
-
-/// What a path sample evaluation produced: its splats. The MCMC target's scalar is the sum of
-/// their luminances (Kelemen et al. 2002, section 3: `I(u)` = luminance of the contribution).
-pub trait SplatPayload {
-    /// The splats of this sample.
-    fn splats(&self) -> &[Splat];
-}
 
 /// A full-image RGB accumulator in f64, one per work unit (job), merged in a fixed order so
 /// the final image does not depend on the thread count.
@@ -86,32 +61,6 @@ impl SplatBuffer {
             ];
         }
         img
-    }
-}
-
-/// An [`Observer`] doing expected-value splatting (Veach 1997, section 11.3.3) into a
-/// [`SplatBuffer`]: a sample with target value `f` and weight `w` adds `w * rgb / f` for each of
-/// its splats. The global factor `b / mutations_per_pixel` is applied when the image is made.
-#[derive(Debug)]
-pub struct SplatObserver<'a> {
-    /// The buffer receiving the splats.
-    pub buffer: &'a mut SplatBuffer,
-    /// Splats dropped because they were non-finite or outside the image.
-    pub dropped: u64,
-}
-
-impl<S, P: SplatPayload> Observer<S, P> for SplatObserver<'_> {
-    #[inline]
-    fn splat(&mut self, sample: &Sample<S, P>, weight: f64) {
-        if weight <= 0.0 || sample.log_density == f64::NEG_INFINITY {
-            return;
-        }
-        let inv_f = (-sample.log_density).exp();
-        for s in sample.payload.splats() {
-            if !self.buffer.add(s.raster, s.rgb, weight * inv_f) {
-                self.dropped += 1;
-            }
-        }
     }
 }
 

@@ -1,0 +1,112 @@
+//! Fixed work units of the render loop: chains grouped in jobs, run in rounds in parallel,
+//! with the controllers' shared statistics pooled in job order between rounds.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::shared::SharedController;
+use super::splat::{SplatObserver, SplatPayload, SplatSink};
+use crate::chain::Chain;
+use crate::controller::Controller;
+use crate::kernel::Kernel;
+use crate::progress::Progress;
+use crate::target::Target;
+use crate::ChainRng;
+
+/// Mutations between two checks of the cancel flag and the deadline.
+const POLL_EVERY: u64 = 64;
+
+/// One work unit: its chains (each with its remaining mutations) and its own sink.
+pub(crate) struct Job<'t, T: Target, K, C, Sk> {
+    pub(crate) chains: Vec<(Chain<'t, T, K, C, ChainRng>, u64)>,
+    pub(crate) sink: Sk,
+    pub(crate) dropped: u64,
+    pub(crate) non_finite: u64,
+}
+
+impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
+    pub(crate) fn new(sink: Sk) -> Self {
+        Self {
+            chains: Vec::new(),
+            sink,
+            dropped: 0,
+            non_finite: 0,
+        }
+    }
+}
+
+/// What the rounds ended with.
+pub(crate) struct RoundsSummary<Sh> {
+    pub(crate) cancelled: bool,
+    pub(crate) shared: Sh,
+}
+
+/// Runs rounds of `round` mutations per chain until every chain's budget is used, the
+/// deadline passes or `cancel` is set; pools the controllers' shared statistics after every
+/// round, in job order.
+pub(crate) fn run_rounds<T, K, C, Sk>(
+    jobs: &mut [Job<'_, T, K, C, Sk>],
+    round: u64,
+    deadline: Option<Instant>,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> RoundsSummary<C::Shared>
+where
+    T: Target,
+    T::Payload: SplatPayload,
+    K: Kernel<T> + Send,
+    C: Controller<K, T::State> + SharedController<K> + Send,
+    Sk: SplatSink,
+{
+    let mut pooled = C::Shared::default();
+    let stop = || cancel.load(Ordering::Relaxed) || deadline.is_some_and(|t| Instant::now() >= t);
+    loop {
+        if stop() || !jobs.iter().any(|j| j.chains.iter().any(|c| c.1 > 0)) {
+            break;
+        }
+        jobs.par_iter_mut().for_each(|job| {
+            let Job {
+                chains,
+                sink,
+                dropped,
+                non_finite,
+            } = job;
+            let mut observer = SplatObserver::new(sink);
+            'chains: for (chain, remaining) in chains.iter_mut() {
+                let mut left = round.min(*remaining);
+                while left > 0 {
+                    if stop() {
+                        break 'chains;
+                    }
+                    let n = left.min(POLL_EVERY);
+                    for _ in 0..n {
+                        if chain.step(&mut observer).is_err() {
+                            *non_finite += 1;
+                        }
+                    }
+                    left -= n;
+                    *remaining -= n;
+                    progress.advance(n);
+                }
+            }
+            *dropped += observer.dropped;
+        });
+        for job in jobs.iter_mut() {
+            for (chain, _) in &mut job.chains {
+                chain.controller_mut().contribute(&mut pooled);
+            }
+        }
+        for job in jobs.iter_mut() {
+            for (chain, _) in &mut job.chains {
+                let (kernel, controller) = chain.kernel_and_controller_mut();
+                controller.receive(kernel, &pooled);
+            }
+        }
+    }
+    RoundsSummary {
+        cancelled: cancel.load(Ordering::Relaxed),
+        shared: pooled,
+    }
+}

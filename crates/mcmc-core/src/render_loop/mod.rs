@@ -1,0 +1,444 @@
+//! The generic MCMC render loop: bootstrap, chain starts, many chains in fixed jobs, rounds
+//! with shared statistics, budgets, cancellation, progress, expected-value splatting into the
+//! caller's sink.
+//!
+//! Everything an MCMC renderer needs besides its path sampler lives here, generic over the
+//! state type: primary sample space (`pss::FreshPss`), path space, or a renderer's own.
+//!
+//! 1. **Bootstrap** (pbrt-v3/v4's scheme): `bootstrap_samples` independent states per target,
+//!    drawn through [`IndependentStates`] from keys; `b` = the sum over targets of the mean
+//!    weight, with its standard error. Memory does not grow with the sample count (chunk sums;
+//!    see [`bootstrap_key`]).
+//! 2. **Chain starts** by systematic resampling in proportion to the weights, so chains start
+//!    in the stationary distribution (no start-up bias, no burn-in). A chain keeps the target
+//!    of its start (MMLT: one target per path depth).
+//! 3. **Chains in fixed jobs**, each job with its own sink, merged in job order; per-chain RNGs
+//!    seeded from (seed, chain index): under a mutation budget the image is bit-identical for
+//!    any thread count.
+//! 4. **Rounds**: every chain runs `round_mutations` steps, then the controllers' shared
+//!    statistics are pooled in job order and handed back ([`SharedController`]). Time budget,
+//!    cancellation and progress are checked inside rounds, so a cancel takes effect within a
+//!    fraction of a second and the partial image is a correct estimate of the mutations done.
+//!
+//! The pixel estimate is `I_j = (b / N) sum_i sum_splats w_i rgb / f(x_i)` per unit of the
+//! sink's measure (Kelemen et al. 2002, eq. 5, with expected values): multiply the sink by
+//! [`LoopOutput::splat_scale`] `= b / N` and by the inverse of the pixel's measure (for
+//! primary sample space mapped onto a `W x H` image: `W * H`).
+
+mod bootstrap;
+mod jobs;
+mod shared;
+mod splat;
+
+pub use bootstrap::{bootstrap_key, IndependentStates};
+pub use shared::SharedController;
+pub use splat::{Splat, SplatGrid, SplatObserver, SplatPayload, SplatSink};
+
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+use rand::SeedableRng;
+
+use crate::chain::Chain;
+use crate::controller::Controller;
+use crate::kernel::Kernel;
+use crate::progress::Progress;
+use crate::seed::chain_seed;
+use crate::stats::AcceptanceStats;
+use crate::target::Target;
+use crate::{ChainRng, McmcError};
+
+/// How long a render loop runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LoopBudget {
+    /// A total number of mutations over all chains (deterministic output).
+    Mutations(u64),
+    /// Wall-clock time from the call, bootstrap included (output depends on speed).
+    Time(Duration),
+}
+
+/// Settings of a render loop. Plain data with documented defaults; check them with
+/// [`LoopSettings::validate`] (the loop does).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoopSettings {
+    /// Number of Markov chains (default 256; 1..=1 048 576). Capped at the number of
+    /// mutations, with a note.
+    pub chains: usize,
+    /// Independent samples per target in the bootstrap (default 100 000, pbrt's value;
+    /// 1..=10^12).
+    pub bootstrap_samples: u64,
+    /// The budget (default 1 000 000 mutations).
+    pub budget: LoopBudget,
+    /// Master seed (default 0).
+    pub seed: u64,
+    /// Mutations per chain per round (default 1000; >= 1): how often shared statistics are
+    /// pooled.
+    pub round_mutations: u64,
+    /// Number of fixed work units (default 32; 1..=4096). The image depends on it, not on the
+    /// thread count.
+    pub jobs: usize,
+    /// Under a time budget, the share of the time the bootstrap may use (default 0.25, in
+    /// (0, 1]); it stops early (with a note) when the share is spent.
+    pub bootstrap_time_share: f64,
+}
+
+impl Default for LoopSettings {
+    fn default() -> Self {
+        Self {
+            chains: 256,
+            bootstrap_samples: 100_000,
+            budget: LoopBudget::Mutations(1_000_000),
+            seed: 0,
+            round_mutations: 1000,
+            jobs: 32,
+            bootstrap_time_share: 0.25,
+        }
+    }
+}
+
+/// Largest accepted chain count.
+pub const MAX_CHAINS: usize = 1 << 20;
+
+/// Largest accepted bootstrap size per target.
+pub const MAX_BOOTSTRAP_SAMPLES: u64 = 1_000_000_000_000;
+
+impl LoopSettings {
+    /// Checks every field against its documented range.
+    ///
+    /// # Errors
+    /// [`McmcError::InvalidParameter`] naming the first field out of range.
+    pub fn validate(&self) -> Result<(), McmcError> {
+        let range = |name, v: f64, lo: f64, hi: f64, allowed| {
+            McmcError::check_range(name, v, lo, hi, allowed)
+        };
+        range("chains", self.chains as f64, 1.0, MAX_CHAINS as f64, "1..=1048576")?;
+        range(
+            "bootstrap_samples",
+            self.bootstrap_samples as f64,
+            1.0,
+            MAX_BOOTSTRAP_SAMPLES as f64,
+            "1..=10^12",
+        )?;
+        range(
+            "round_mutations",
+            self.round_mutations as f64,
+            1.0,
+            f64::MAX,
+            ">= 1",
+        )?;
+        range("jobs", self.jobs as f64, 1.0, 4096.0, "1..=4096")?;
+        if !(self.bootstrap_time_share > 0.0 && self.bootstrap_time_share <= 1.0) {
+            return Err(McmcError::InvalidParameter {
+                name: "bootstrap_time_share",
+                value: self.bootstrap_time_share,
+                allowed: "(0, 1]",
+            });
+        }
+        match self.budget {
+            LoopBudget::Mutations(0) => Err(McmcError::InvalidParameter {
+                name: "budget",
+                value: 0.0,
+                allowed: ">= 1 mutation",
+            }),
+            LoopBudget::Time(t) if t.is_zero() => Err(McmcError::InvalidParameter {
+                name: "budget",
+                value: 0.0,
+                allowed: "> 0 seconds",
+            }),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Which chain a kernel or controller is made for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ChainSlot {
+    /// Chain index (0-based, fixed for a seed).
+    pub chain: usize,
+    /// Index of the target the chain samples (its start's target).
+    pub target: usize,
+}
+
+/// What a render loop produced.
+#[derive(Clone, Debug)]
+pub struct LoopOutput<K, Sh> {
+    /// The job sinks merged in job order. Multiply by [`LoopOutput::splat_scale`].
+    pub sink: K,
+    /// `b / mutations`: the factor that turns the sink's accumulated `w rgb / f` into the
+    /// estimate per unit of the sink's measure (0 when nothing ran).
+    pub splat_scale: f64,
+    /// The bootstrap estimate of `b`, the integral of the target (summed over targets).
+    pub b: f64,
+    /// Standard error of `b`.
+    pub b_standard_error: f64,
+    /// Bootstrap samples evaluated (over all targets).
+    pub bootstrap_samples: u64,
+    /// Chains that ran.
+    pub chains: usize,
+    /// Mutations performed (all chains).
+    pub mutations: u64,
+    /// Acceptance statistics pooled over chains.
+    pub stats: AcceptanceStats,
+    /// The controllers' shared statistics at the end (pooled over all chains).
+    pub shared: Sh,
+    /// Splats the sinks dropped (non-finite or outside the image).
+    pub dropped_splats: u64,
+    /// Candidates with a non-finite density or Hastings term (rejected; a target bug).
+    pub non_finite: u64,
+    /// True if cancelled before the budget was used.
+    pub cancelled: bool,
+    /// True if no bootstrap sample had positive weight: nothing carries light, the sink is
+    /// empty (see `notes`).
+    pub found_nothing: bool,
+    /// Human-readable notes (warnings, early stops, why the image is black).
+    pub notes: Vec<String>,
+}
+
+/// A render loop over a set of targets: what to sample (`targets`, one per chain family), how
+/// to draw independent states (`states`), and factories for each chain's kernel and
+/// controller and for each job's sink.
+///
+/// # Example
+/// ```
+/// use std::sync::atomic::AtomicBool;
+/// use mcmc_core::render_loop::{
+///     IndependentStates, LoopBudget, LoopSettings, RenderLoop, Splat, SplatGrid,
+/// };
+/// use mcmc_core::{GaussianRandomWalk, Mh, NoAdaptation, NoProgress, Target};
+///
+/// /// f(u) = 1 + u0 on the unit square, splatted at (u0, u1) on a 4 x 1 image.
+/// struct Ramp;
+/// impl Target for Ramp {
+///     type State = Vec<f64>;
+///     type Payload = Option<Splat>;
+///     fn evaluate(&self, u: &mut Vec<f64>, out: &mut Option<Splat>) -> f64 {
+///         if !u.iter().all(|v| (0.0..1.0).contains(v)) {
+///             *out = None;
+///             return f64::NEG_INFINITY;
+///         }
+///         let f = 1.0 + u[0];
+///         *out = Some(Splat { raster: [4.0 * u[0] as f32, 0.5], rgb: [f as f32; 3] });
+///         f.ln()
+///     }
+/// }
+/// struct Uniform;
+/// impl IndependentStates<Vec<f64>> for Uniform {
+///     fn empty(&self) -> Vec<f64> { vec![0.0; 2] }
+///     fn independent(&self, key: u64, u: &mut Vec<f64>) {
+///         let h = |k: u64| (mcmc_core::seed::mix64(k) >> 11) as f64 / (1u64 << 53) as f64;
+///         u.clear();
+///         u.extend([h(key), h(key ^ 7)]);
+///     }
+/// }
+/// let settings = LoopSettings {
+///     chains: 8,
+///     bootstrap_samples: 1000,
+///     budget: LoopBudget::Mutations(20_000),
+///     ..LoopSettings::default()
+/// };
+/// let out = RenderLoop {
+///     targets: &[Ramp],
+///     states: &Uniform,
+///     kernel: |_| Mh::new(GaussianRandomWalk::new(0.2).unwrap()),
+///     controller: |_| NoAdaptation,
+///     sink: || SplatGrid::new(4, 1),
+/// }
+/// .run(&settings, &NoProgress, &AtomicBool::new(false))
+/// .unwrap();
+/// // Pixel x covers u0 in [x/4, (x+1)/4): its value is 4 * integral of (1 + u0) there.
+/// let px0 = out.sink.get(0, 0)[0] * out.splat_scale * 4.0;
+/// assert!((px0 - 1.125).abs() < 0.1, "{px0}");
+/// ```
+pub struct RenderLoop<'a, T, Src: ?Sized, FK, FC, FS> {
+    /// The targets (PSSMLT: one; MMLT: one per path depth).
+    pub targets: &'a [T],
+    /// Independent states for the bootstrap and chain starts.
+    pub states: &'a Src,
+    /// Makes the kernel of a chain.
+    pub kernel: FK,
+    /// Makes the controller of a chain.
+    pub controller: FC,
+    /// Makes an empty sink (one per job, plus the merged result).
+    pub sink: FS,
+}
+
+impl<T, Src, K, C, FK, FC, Sk, FS> RenderLoop<'_, T, Src, FK, FC, FS>
+where
+    T: Target,
+    T::Payload: SplatPayload,
+    Src: IndependentStates<T::State> + ?Sized,
+    K: Kernel<T> + Send,
+    C: Controller<K, T::State> + SharedController<K> + Send,
+    FK: Fn(ChainSlot) -> K + Sync,
+    FC: Fn(ChainSlot) -> C + Sync,
+    Sk: SplatSink,
+    FS: Fn() -> Sk + Sync,
+{
+    /// Runs the loop on the current rayon pool (install it in a pool of your size).
+    ///
+    /// Progress is reported in bootstrap samples plus mutations. `cancel` is polled during the
+    /// bootstrap (between batches of 8192 samples) and every 64 mutations; a cancelled run
+    /// returns what it has, with `cancelled: true`.
+    ///
+    /// # Errors
+    /// [`McmcError::InvalidParameter`] for settings out of range or an empty target list.
+    pub fn run(
+        &self,
+        settings: &LoopSettings,
+        progress: &dyn Progress,
+        cancel: &AtomicBool,
+    ) -> Result<LoopOutput<Sk, C::Shared>, McmcError> {
+        settings.validate()?;
+        if self.targets.is_empty() {
+            return Err(McmcError::InvalidParameter {
+                name: "targets",
+                value: 0.0,
+                allowed: "at least one target",
+            });
+        }
+        let start = Instant::now();
+        let deadline = match settings.budget {
+            LoopBudget::Time(t) => Some(start + t),
+            LoopBudget::Mutations(_) => None,
+        };
+        let mut notes = Vec::new();
+        let mut chains = settings.chains;
+        if let LoopBudget::Mutations(n) = settings.budget {
+            if (chains as u64) > n {
+                notes.push(format!(
+                    "{chains} chains requested for {n} mutations: using {n} chains (each needs at least one mutation)"
+                ));
+                chains = n as usize;
+            }
+        }
+        let targets_count = self.targets.len() as u64;
+        let bootstrap_total = settings
+            .bootstrap_samples
+            .saturating_mul(targets_count);
+        progress.set_total(match settings.budget {
+            LoopBudget::Mutations(n) => bootstrap_total.saturating_add(n),
+            LoopBudget::Time(_) => bootstrap_total,
+        });
+        let bootstrap_deadline = match settings.budget {
+            LoopBudget::Time(t) => Some(start + t.mul_f64(settings.bootstrap_time_share)),
+            LoopBudget::Mutations(_) => None,
+        };
+        let boot = bootstrap::run(
+            self.targets,
+            self.states,
+            &bootstrap::BootstrapPlan {
+                per_target: settings.bootstrap_samples,
+                chains,
+                seed: settings.seed,
+                deadline: bootstrap_deadline,
+                progress,
+                cancel,
+            },
+        );
+        if boot.stopped_early {
+            notes.push(format!(
+                "the bootstrap stopped after {} of {} samples to stay within {:.0}% of the time budget",
+                boot.evaluated,
+                bootstrap_total,
+                settings.bootstrap_time_share * 100.0
+            ));
+        }
+        let mut out = LoopOutput {
+            sink: (self.sink)(),
+            splat_scale: 0.0,
+            b: boot.b,
+            b_standard_error: boot.standard_error,
+            bootstrap_samples: boot.evaluated,
+            chains: 0,
+            mutations: 0,
+            stats: AcceptanceStats::default(),
+            shared: C::Shared::default(),
+            dropped_splats: 0,
+            non_finite: 0,
+            cancelled: boot.cancelled,
+            found_nothing: false,
+            notes,
+        };
+        if boot.cancelled {
+            out.notes.push("cancelled during the bootstrap".to_owned());
+            return Ok(out);
+        }
+        if boot.starts.is_empty() {
+            out.found_nothing = true;
+            out.notes.push(format!(
+                "the bootstrap's {} independent samples found nothing with positive weight (no light-carrying path): the image is black",
+                boot.evaluated
+            ));
+            return Ok(out);
+        }
+
+        // Chains, split into fixed jobs.
+        let per_chain = |c: usize| -> u64 {
+            match settings.budget {
+                LoopBudget::Mutations(n) => {
+                    n / chains as u64 + u64::from((c as u64) < n % chains as u64)
+                }
+                LoopBudget::Time(_) => u64::MAX,
+            }
+        };
+        let n_jobs = settings.jobs.min(chains);
+        let mut skipped = 0usize;
+        let mut job_list: Vec<jobs::Job<'_, T, K, C, Sk>> = (0..n_jobs)
+            .map(|j| {
+                let (lo, hi) = (j * chains / n_jobs, (j + 1) * chains / n_jobs);
+                let mut job = jobs::Job::new((self.sink)());
+                for c in lo..hi {
+                    let (target, index) = boot.starts[c];
+                    let slot = ChainSlot { chain: c, target };
+                    let mut state = self.states.empty();
+                    self.states.independent(
+                        bootstrap_key(settings.seed, target, index),
+                        &mut state,
+                    );
+                    let rng = ChainRng::seed_from_u64(chain_seed(settings.seed, c as u64));
+                    match Chain::new(
+                        &self.targets[target],
+                        (self.kernel)(slot),
+                        (self.controller)(slot),
+                        rng,
+                        state,
+                    ) {
+                        Ok(chain) => job.chains.push((chain, per_chain(c))),
+                        Err(_) => skipped += 1,
+                    }
+                }
+                job
+            })
+            .collect();
+        if skipped > 0 {
+            out.notes.push(format!(
+                "{skipped} chain starts re-evaluated to zero or non-finite density and were skipped (a target that is not a deterministic function of its state?)"
+            ));
+        }
+        let summary = jobs::run_rounds(
+            &mut job_list,
+            settings.round_mutations,
+            deadline,
+            progress,
+            cancel,
+        );
+        out.cancelled = summary.cancelled;
+        out.shared = summary.shared;
+        for job in &job_list {
+            out.sink.merge(&job.sink);
+            out.dropped_splats += job.dropped;
+            out.non_finite += job.non_finite;
+            for (chain, _) in &job.chains {
+                out.stats.merge(chain.stats());
+            }
+            out.chains += job.chains.len();
+        }
+        out.mutations = out.stats.steps;
+        out.splat_scale = if out.mutations == 0 {
+            0.0
+        } else {
+            boot.b / out.mutations as f64
+        };
+        Ok(out)
+    }
+}

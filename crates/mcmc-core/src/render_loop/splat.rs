@@ -1,0 +1,202 @@
+//! Splats: where a sample's contribution lands on the image, the sink that accumulates them,
+//! and the expected-value splatting observer.
+
+use crate::kernel::Observer;
+use crate::target::Sample;
+
+/// One contribution of a sample to the image: a raster position and an RGB value (for a
+/// renderer: the path's MIS-weighted contribution divided by its sampling density).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Splat {
+    /// Raster position in pixels, (0, 0) = top-left corner of the image.
+    pub raster: [f32; 2],
+    /// The contribution.
+    pub rgb: [f32; 3],
+}
+
+/// A target payload that says where the evaluated sample contributes: its splats. The MCMC
+/// target's density is usually the summed luminance of these (Kelemen et al. 2002, section 3).
+pub trait SplatPayload {
+    /// The splats of this sample.
+    fn splats(&self) -> &[Splat];
+}
+
+impl SplatPayload for Vec<Splat> {
+    fn splats(&self) -> &[Splat] {
+        self
+    }
+}
+
+impl SplatPayload for Option<Splat> {
+    fn splats(&self) -> &[Splat] {
+        self.as_slice()
+    }
+}
+
+/// Where a render loop's splats accumulate: the caller's film. The loop gives every job its
+/// own sink and merges them in job order, so no sink needs locks or atomics.
+pub trait SplatSink: Send {
+    /// Adds `weight * splat.rgb` where `splat.raster` lands; returns false if the splat was
+    /// dropped (outside the image, or non-finite).
+    fn add(&mut self, splat: &Splat, weight: f64) -> bool;
+    /// Adds everything `other` accumulated.
+    fn merge(&mut self, other: &Self);
+}
+
+/// A full-image RGB accumulator in f64 with a one-pixel box filter: a ready [`SplatSink`] for
+/// renderers that do not bring their own film (and the splat layer of `render`'s film).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplatGrid {
+    width: usize,
+    height: usize,
+    data: Vec<[f64; 3]>,
+}
+
+impl SplatGrid {
+    /// A zeroed `width` x `height` grid.
+    #[must_use]
+    pub fn new(width: usize, height: usize) -> Self {
+        Self {
+            width,
+            height,
+            data: vec![[0.0; 3]; width * height],
+        }
+    }
+
+    /// Width in pixels.
+    #[must_use]
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in pixels.
+    #[must_use]
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Adds `rgb * weight` to the pixel containing `raster`; splats outside the image or with
+    /// a non-finite product are ignored and return false.
+    #[inline]
+    pub fn add_rgb(&mut self, raster: [f32; 2], rgb: [f32; 3], weight: f64) -> bool {
+        let (x, y) = (raster[0].floor(), raster[1].floor());
+        if !(x >= 0.0 && y >= 0.0 && (x as usize) < self.width && (y as usize) < self.height) {
+            return false;
+        }
+        let v = rgb.map(|c| f64::from(c) * weight);
+        if !v.iter().all(|c| c.is_finite()) {
+            return false;
+        }
+        let px = &mut self.data[y as usize * self.width + x as usize];
+        for c in 0..3 {
+            px[c] += v[c];
+        }
+        true
+    }
+
+    /// The accumulated value of pixel `(x, y)` (row-major, top row first).
+    #[must_use]
+    pub fn get(&self, x: usize, y: usize) -> [f64; 3] {
+        self.data[y * self.width + x]
+    }
+
+    /// All pixels, row-major, top row first.
+    #[must_use]
+    pub fn pixels(&self) -> &[[f64; 3]] {
+        &self.data
+    }
+
+    /// The pixels multiplied by `scale`, as f32 RGB (row-major).
+    #[must_use]
+    pub fn to_rgb32(&self, scale: f64) -> Vec<[f32; 3]> {
+        self.data
+            .iter()
+            .map(|p| p.map(|c| (c * scale) as f32))
+            .collect()
+    }
+}
+
+impl SplatSink for SplatGrid {
+    #[inline]
+    fn add(&mut self, splat: &Splat, weight: f64) -> bool {
+        self.add_rgb(splat.raster, splat.rgb, weight)
+    }
+
+    fn merge(&mut self, other: &Self) {
+        for (a, b) in self.data.iter_mut().zip(&other.data) {
+            for c in 0..3 {
+                a[c] += b[c];
+            }
+        }
+    }
+}
+
+/// An [`Observer`] doing expected-value splatting (Veach 1997, section 11.3.3) into a
+/// [`SplatSink`]: a sample with target density `f` reported with weight `w` adds
+/// `w * rgb / f` for each of its splats. The global factor `b / mutations` (and the caller's
+/// pixel measure) is applied when the image is made.
+#[derive(Debug)]
+pub struct SplatObserver<'a, K> {
+    /// The sink receiving the splats.
+    pub sink: &'a mut K,
+    /// Splats the sink dropped (non-finite or outside the image).
+    pub dropped: u64,
+}
+
+impl<'a, K> SplatObserver<'a, K> {
+    /// An observer splatting into `sink`.
+    pub fn new(sink: &'a mut K) -> Self {
+        Self { sink, dropped: 0 }
+    }
+}
+
+impl<S, P: SplatPayload, K: SplatSink> Observer<S, P> for SplatObserver<'_, K> {
+    #[inline]
+    fn splat(&mut self, sample: &Sample<S, P>, weight: f64) {
+        if weight == 0.0 || sample.log_density == f64::NEG_INFINITY {
+            return;
+        }
+        let inv_f = (-sample.log_density).exp();
+        for s in sample.payload.splats() {
+            if !self.sink.add(s, weight * inv_f) {
+                self.dropped += 1;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_ignores_outside_and_nonfinite() {
+        let mut g = SplatGrid::new(2, 2);
+        assert!(g.add_rgb([0.5, 1.5], [1.0, 2.0, 3.0], 0.5));
+        assert!(!g.add_rgb([2.0, 0.0], [1.0; 3], 1.0));
+        assert!(!g.add_rgb([-0.1, 0.0], [1.0; 3], 1.0));
+        assert!(!g.add_rgb([0.0, 0.0], [f32::NAN, 0.0, 0.0], 1.0));
+        assert_eq!(g.get(0, 1), [0.5, 1.0, 1.5]);
+        assert_eq!(g.to_rgb32(2.0)[2], [1.0, 2.0, 3.0]);
+        let mut h = SplatGrid::new(2, 2);
+        h.merge(&g);
+        h.merge(&g);
+        assert_eq!(h.get(0, 1), [1.0, 2.0, 3.0]);
+    }
+
+    #[test]
+    fn observer_divides_by_the_density() {
+        let mut g = SplatGrid::new(1, 1);
+        let mut obs = SplatObserver::new(&mut g);
+        let sample = Sample {
+            state: 0.0f64,
+            log_density: 2.0f64.ln(),
+            payload: Some(Splat {
+                raster: [0.5, 0.5],
+                rgb: [4.0; 3],
+            }),
+        };
+        Observer::<f64, Option<Splat>>::splat(&mut obs, &sample, 0.25);
+        assert_eq!(g.get(0, 0), [0.5; 3]);
+    }
+}

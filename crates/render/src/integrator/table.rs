@@ -1,0 +1,134 @@
+//! The table of integrators: the one place that names them, from which the CLI's
+//! `--integrator` values and their help, and the tests that run every integrator, are built.
+
+/// Which light-transport algorithm renders the image. Every variant has one row in
+/// [`INTEGRATORS`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[non_exhaustive]
+pub enum IntegratorKind {
+    /// Unidirectional path tracing with next-event estimation and MIS.
+    #[default]
+    Pt,
+    /// Bidirectional path tracing with MIS over all strategies (the reference renderer).
+    Bdpt,
+    /// Primary-sample-space MLT over BDPT (Kelemen et al. 2002): all strategies per sample.
+    Pssmlt,
+    /// Multiplexed MLT (Hachisuka et al. 2014): one BDPT strategy per sample, path length
+    /// chosen per chain.
+    Mmlt,
+}
+
+/// One row of the integrator table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct IntegratorInfo {
+    /// The name on the command line (`--integrator NAME`).
+    pub name: &'static str,
+    /// One line for `--help`.
+    pub description: &'static str,
+    /// True for the Markov chain integrators: their budget is in mutations per pixel and they
+    /// take the MCMC settings (chains, bootstrap, large and small steps).
+    pub is_mcmc: bool,
+    /// What the render session runs.
+    pub kind: IntegratorKind,
+}
+
+/// Every integrator, in `--help` order; the first is the default. Adding an integrator is one
+/// row here (plus its [`IntegratorKind`] variant and its implementation).
+pub const INTEGRATORS: &[IntegratorInfo] = &[
+    IntegratorInfo {
+        name: "pt",
+        description: "unidirectional path tracing with next-event estimation and MIS",
+        is_mcmc: false,
+        kind: IntegratorKind::Pt,
+    },
+    IntegratorInfo {
+        name: "bdpt",
+        description: "bidirectional path tracing, all strategies with MIS (the reference)",
+        is_mcmc: false,
+        kind: IntegratorKind::Bdpt,
+    },
+    IntegratorInfo {
+        name: "pssmlt",
+        description: "primary-sample-space MLT over BDPT (Kelemen et al. 2002)",
+        is_mcmc: true,
+        kind: IntegratorKind::Pssmlt,
+    },
+    IntegratorInfo {
+        name: "mmlt",
+        description: "multiplexed MLT: one BDPT strategy per sample (Hachisuka et al. 2014)",
+        is_mcmc: true,
+        kind: IntegratorKind::Mmlt,
+    },
+];
+
+impl IntegratorKind {
+    /// This integrator's row of [`INTEGRATORS`].
+    ///
+    /// # Panics
+    /// If the variant has no row (a table defect, caught by the unit tests).
+    #[must_use]
+    pub const fn info(self) -> &'static IntegratorInfo {
+        let mut i = 0;
+        while i < INTEGRATORS.len() {
+            if INTEGRATORS[i].kind as u8 == self as u8 {
+                return &INTEGRATORS[i];
+            }
+            i += 1;
+        }
+        panic!("an IntegratorKind without a row in INTEGRATORS")
+    }
+
+    /// The command-line name (`pt`, `bdpt`, ...).
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        self.info().name
+    }
+
+    /// True for the Markov chain integrators (budget in mutations per pixel).
+    #[must_use]
+    pub const fn is_mcmc(self) -> bool {
+        self.info().is_mcmc
+    }
+
+    /// The integrator called `name` on the command line, if any.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        INTEGRATORS
+            .iter()
+            .find(|info| info.name == name)
+            .map(|info| info.kind)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_kind_has_exactly_one_row_and_names_are_unique() {
+        for (i, a) in INTEGRATORS.iter().enumerate() {
+            assert!(
+                INTEGRATORS[i + 1..]
+                    .iter()
+                    .all(|b| b.name != a.name && b.kind != a.kind),
+                "{} twice",
+                a.name
+            );
+            assert_eq!(a.kind.info(), a);
+            assert_eq!(IntegratorKind::from_name(a.name), Some(a.kind));
+        }
+        // Every variant has a row; the match has no wildcard arm, so a new variant does not
+        // compile here until it is added to `all` (and then needs its row).
+        use IntegratorKind::{Bdpt, Mmlt, Pssmlt, Pt};
+        let all = [Pt, Bdpt, Pssmlt, Mmlt];
+        assert_eq!(all.len(), INTEGRATORS.len());
+        for kind in all {
+            match kind {
+                Pt | Bdpt | Pssmlt | Mmlt => assert_eq!(kind.info().kind, kind),
+            }
+        }
+        assert_eq!(INTEGRATORS[0].kind, IntegratorKind::default());
+        assert_eq!(IntegratorKind::from_name("nope"), None);
+        assert!(IntegratorKind::Mmlt.is_mcmc() && !IntegratorKind::Bdpt.is_mcmc());
+    }
+}

@@ -1,0 +1,235 @@
+//! How render runs its path samplers through mcmc-core's generic render loop: settings in,
+//! image out. No bootstrap, resampling or chain scheduling lives here (see
+//! `mcmc_core::render_loop`); this file maps render's settings onto the loop, picks the
+//! controller for the large-step mode and turns the loop's sink into an image.
+
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use mcmc_core::controller::{AutoLargeStep, LargeStepEstimate, LargeStepStats, LargeStepTunable};
+use mcmc_core::render_loop::{
+    LoopBudget, LoopOutput, LoopSettings, RenderLoop, SplatGrid, SplatPayload,
+};
+use mcmc_core::stats::AcceptanceStats;
+use mcmc_core::{Kernel, NoAdaptation, Progress, Target};
+use pss::{FreshPss, PssState};
+
+use crate::image::Image;
+
+/// How the large-step probability is chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LargeStepMode {
+    /// A fixed probability in `[0, 1]`.
+    Fixed(f64),
+    /// Automatic control (Zsolnai & Szirmay-Kalos 2013): every chain first runs
+    /// `estimation_steps` mutations with `initial` large-step probability; `eta_s`, `eta_l`,
+    /// `eta_0` are pooled over all chains (`mcmc_core::controller::AutoLargeStep::pooled`) and
+    /// `p_l` is set for the rest of the render (finite adaptation: the kernel is fixed
+    /// afterwards).
+    Auto {
+        /// Large-step probability during the estimation phase.
+        initial: f64,
+        /// Mutations per chain in the estimation phase.
+        estimation_steps: u64,
+    },
+}
+
+/// Budget of an MCMC render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MltBudget {
+    /// Mutations per pixel (deterministic output).
+    MutationsPerPixel(f64),
+    /// Wall-clock time, bootstrap included (output depends on speed).
+    Time(Duration),
+}
+
+/// Settings of an MCMC render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MltSettings {
+    /// Image width.
+    pub width: usize,
+    /// Image height.
+    pub height: usize,
+    /// Number of Markov chains (default 256).
+    pub chains: usize,
+    /// Independent samples per target in the bootstrap (default 100 000, pbrt's value).
+    pub bootstrap_samples: usize,
+    /// Budget.
+    pub budget: MltBudget,
+    /// Large-step probability.
+    pub large_step: LargeStepMode,
+    /// Master seed.
+    pub seed: u64,
+    /// Number of PSS streams the target reads (1..=4).
+    pub streams: usize,
+}
+
+/// What an MCMC render produced.
+#[derive(Clone, Debug)]
+pub struct MltOutput {
+    /// The image (black if nothing carried light).
+    pub image: Image,
+    /// The normalisation `b` from the bootstrap.
+    pub b: f64,
+    /// Standard error of `b`.
+    pub b_standard_error: f64,
+    /// Bootstrap samples evaluated.
+    pub bootstrap_samples: u64,
+    /// Mutations performed (all chains).
+    pub mutations: u64,
+    /// Acceptance statistics pooled over chains.
+    pub stats: AcceptanceStats,
+    /// The automatic large-step estimate, if automatic control ran to the end of its phase.
+    pub large_step: Option<LargeStepEstimate>,
+    /// The large-step probability used after the estimation phase.
+    pub final_large_step_probability: f64,
+    /// Splats dropped (non-finite or outside the image).
+    pub dropped: u64,
+    /// Non-finite target values met by chains (rejected candidates).
+    pub non_finite: u64,
+    /// True if cancelled before the budget was used.
+    pub cancelled: bool,
+    /// Why the image is black, if it is ("no light-carrying path found").
+    pub message: Option<String>,
+    /// Other notes from the loop (chains capped, bootstrap stopped early by the time budget).
+    pub notes: Vec<String>,
+}
+
+/// Mutations per chain per round when no estimation phase sets the round length.
+const ROUND: u64 = 1000;
+
+/// Runs an MCMC render over one or more targets (PSSMLT: one; MMLT: one per path depth)
+/// through `mcmc_core::render_loop`: bootstrap of fresh PSS points (`pss::FreshPss`), chain
+/// starts resampled in proportion to `f`, chains in 32 fixed jobs, expected-value splats, the
+/// large-step controller of `settings.large_step`.
+///
+/// Pixel estimate: `I_j = (b W H / N) sum_i sum_splats w_i rgb / f(u_i)` with `N` the total
+/// number of mutations (Kelemen et al. 2002, eq. 5 with expected values).
+pub fn render_mlt<T, K>(
+    targets: &[T],
+    make_kernel: impl Fn(f64) -> K + Sync,
+    settings: &MltSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> MltOutput
+where
+    T: Target<State = PssState>,
+    T::Payload: SplatPayload,
+    K: Kernel<T> + LargeStepTunable + Send,
+{
+    let pixels = (settings.width * settings.height) as f64;
+    let chains = settings.chains.max(1);
+    let budget = match settings.budget {
+        MltBudget::MutationsPerPixel(m) => {
+            LoopBudget::Mutations((m * pixels).round().max(1.0) as u64)
+        }
+        MltBudget::Time(t) => LoopBudget::Time(t),
+    };
+    let mut loop_settings = LoopSettings {
+        chains,
+        bootstrap_samples: settings.bootstrap_samples.max(1) as u64,
+        budget,
+        seed: settings.seed,
+        round_mutations: ROUND,
+        ..LoopSettings::default()
+    };
+    let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
+        .unwrap_or_else(|_| unreachable!("clamped to 1..=4"));
+    let (w, h) = (settings.width, settings.height);
+    let sink = || SplatGrid::new(w, h);
+    match settings.large_step {
+        LargeStepMode::Fixed(p) => {
+            let out = RenderLoop {
+                targets,
+                states: &states,
+                kernel: |_| make_kernel(p),
+                controller: |_| NoAdaptation,
+                sink,
+            }
+            .run(&loop_settings, progress, cancel);
+            finish(out, settings, p, |_| None)
+        }
+        LargeStepMode::Auto {
+            initial,
+            estimation_steps,
+        } => {
+            // At most a tenth of each chain's budget goes to estimation.
+            let steps = match budget {
+                LoopBudget::Mutations(n) => estimation_steps.min(n / chains as u64 / 10),
+                LoopBudget::Time(_) => estimation_steps,
+            }
+            .max(1);
+            // The first round ends exactly when every chain has run its estimation phase.
+            loop_settings.round_mutations = steps;
+            let total = steps.saturating_mul(chains as u64);
+            let out = RenderLoop {
+                targets,
+                states: &states,
+                kernel: |_| make_kernel(initial),
+                controller: |_| {
+                    AutoLargeStep::pooled(total).unwrap_or_else(|_| unreachable!("total >= 1"))
+                },
+                sink,
+            }
+            .run(&loop_settings, progress, cancel);
+            finish(out, settings, initial, |pooled: &LargeStepStats| {
+                (pooled.steps() >= total).then(|| pooled.estimate())
+            })
+        }
+    }
+}
+
+/// Turns the loop's output into an [`MltOutput`].
+fn finish<Sh>(
+    out: Result<LoopOutput<SplatGrid, Sh>, mcmc_core::McmcError>,
+    settings: &MltSettings,
+    initial_p: f64,
+    estimate: impl Fn(&Sh) -> Option<LargeStepEstimate>,
+) -> MltOutput {
+    let (w, h) = (settings.width, settings.height);
+    let out = match out {
+        Ok(out) => out,
+        Err(e) => {
+            return MltOutput {
+                image: Image::new(w, h),
+                b: 0.0,
+                b_standard_error: 0.0,
+                bootstrap_samples: 0,
+                mutations: 0,
+                stats: AcceptanceStats::default(),
+                large_step: None,
+                final_large_step_probability: initial_p,
+                dropped: 0,
+                non_finite: 0,
+                cancelled: false,
+                message: Some(format!("invalid MCMC settings: {e}")),
+                notes: Vec::new(),
+            }
+        }
+    };
+    let large_step = estimate(&out.shared);
+    let scale = out.splat_scale * (w * h) as f64;
+    let mut notes = out.notes;
+    let message = if out.found_nothing {
+        notes.pop()
+    } else {
+        None
+    };
+    MltOutput {
+        image: Image::from_pixels(w, h, out.sink.to_rgb32(scale))
+            .unwrap_or_else(|| Image::new(w, h)),
+        b: out.b,
+        b_standard_error: out.b_standard_error,
+        bootstrap_samples: out.bootstrap_samples,
+        mutations: out.mutations,
+        stats: out.stats,
+        final_large_step_probability: large_step.map_or(initial_p, |e| e.large_step_probability),
+        large_step,
+        dropped: out.dropped_splats,
+        non_finite: out.non_finite,
+        cancelled: out.cancelled,
+        message,
+        notes,
+    }
+}
+
