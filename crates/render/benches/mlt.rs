@@ -13,9 +13,8 @@ use mcmc_core::{Chain, Mh, NoAdaptation, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::SeedableRng;
 use render::bdpt::{self, BdptParams, BdptScratch};
-use render::mlt::{
-    bootstrap_key, Bootstrap, MmltTarget, PssmltTarget, SplatBuffer, SplatObserver, PATH_STREAMS,
-};
+use mcmc_core::render_loop::{SplatGrid, SplatObserver};
+use render::mlt::{MmltTarget, PssmltTarget, PATH_STREAMS};
 use render::sampler::{IndependentSampler, Sampler};
 use render::scene::Scene;
 
@@ -39,22 +38,35 @@ fn bench_chain<T>(c: &mut Criterion, name: &str, target: &T)
 where
     T: Target<State = PssState, Payload = render::mlt::PathPayload>,
 {
-    let bs = Bootstrap::run(target, PATH_STREAMS, 2_000, 1);
-    let start = bs.resample(1, 0.5).first().copied().unwrap_or(0);
-    let state = PssState::new(PATH_STREAMS, bootstrap_key(1, start as u64));
+    // One of 2000 independent points chosen in proportion to f (the loop's resampling with
+    // offset 0.5), so the benchmarked chain starts in the stationary distribution.
+    let mut payload = T::Payload::default();
+    let weights: Vec<f64> = (0..2_000u64)
+        .map(|i| {
+            let mut x = PssState::new(PATH_STREAMS, i);
+            target.evaluate(&mut x, &mut payload).exp()
+        })
+        .collect();
+    let half = 0.5 * weights.iter().sum::<f64>();
+    let mut acc = 0.0;
+    let start = weights
+        .iter()
+        .position(|w| {
+            acc += w;
+            acc > half
+        })
+        .unwrap_or(0) as u64;
+    let state = PssState::new(PATH_STREAMS, start);
     let rng = rand_pcg::Pcg64::seed_from_u64(3);
     let Ok(mut chain) = Chain::new(target, kernel(), NoAdaptation, rng, state) else {
         return;
     };
-    let mut buffer = SplatBuffer::new(SIZE as usize, SIZE as usize);
+    let mut buffer = SplatGrid::new(SIZE as usize, SIZE as usize);
     let mut group = c.benchmark_group("mutations_cornell_glass");
     group.throughput(Throughput::Elements(STEPS));
     group.bench_function(name, |b| {
         b.iter(|| {
-            let mut obs = SplatObserver {
-                buffer: &mut buffer,
-                dropped: 0,
-            };
+            let mut obs = SplatObserver::new(&mut buffer);
             for _ in 0..STEPS {
                 let _ = chain.step(&mut obs);
             }
