@@ -352,7 +352,10 @@ fn help_lists_every_integrator_of_the_table() {
     for info in INTEGRATORS {
         let line = help
             .lines()
-            .find(|l| l.trim_start().starts_with(&format!("{}:", info.name)))
+            .find(|l| {
+                let l = l.trim_start().trim_start_matches("- ");
+                l.starts_with(&format!("{}:", info.name))
+            })
             .unwrap_or_else(|| panic!("no '{}:' line in:\n{help}", info.name));
         assert!(line.contains(info.description), "{line}");
     }
