@@ -7,30 +7,20 @@
 //! ([`SmallStep`] with Kelemen's exponential or a Gaussian kernel, [`LargeStep`], and their
 //! mixture [`PssmltProposal`] whose large-step probability a controller may tune).
 //!
+//! [`FreshPss`] supplies independent points to `mcmc_core::render_loop`, so a renderer that
+//! implements one `mcmc_core::Target` over [`PssState`] gets PSSMLT with bootstrap, chain
+//! starts, deterministic multi-chain jobs, expected-value splatting and adaptive control.
+//!
+//! Lazy mutation is exact, rejections included: see [`PssState`] ("Why lazy equals eager").
+//!
 //! # Example
-//! ```
-//! use mcmc_core::{Chain, Mh, NoAdaptation, Target};
-//! use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
-//! use rand::SeedableRng;
 //!
-//! /// A toy "path": the first two primary samples, density 1 + 8 u0 u1.
-//! struct Toy;
-//! impl Target for Toy {
-//!     type State = PssState;
-//!     type Payload = ();
-//!     fn evaluate(&self, x: &mut PssState, _: &mut ()) -> f64 {
-//!         x.begin();
-//!         let (a, b) = (x.next_sample(), x.next_sample());
-//!         (1.0 + 8.0 * a * b).ln()
-//!     }
-//! }
+//! The whole outside-user program (`examples/custom_target.rs`; run it with
+//! `cargo run --release --example custom_target`): an analytic integrand rendered to a small
+//! image with PSSMLT and automatic large-step control. (Compiled here; its convergence test
+//! runs with the workspace tests.)
 //!
-//! let small = SmallStep::new(SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap());
-//! let kernel = Mh::new(PssmltProposal::new(small, 0.3).unwrap());
-//! let rng = rand_pcg::Pcg64::seed_from_u64(1);
-//! let mut chain = Chain::new(&Toy, kernel, NoAdaptation, rng, PssState::new(1, 7)).unwrap();
-//! chain.run(1000, &mut ()).unwrap();
-//! ```
+#![doc = concat!("```rust,no_run\n", include_str!("../examples/custom_target.rs"), "\n```")]
 
 mod error;
 mod fresh;
