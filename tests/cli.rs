@@ -444,3 +444,39 @@ fn bdpt_strategy_images_are_written() {
         );
     }
 }
+
+/// `--time` covers the whole MCMC render, bootstrap included: with a bootstrap of 2 * 10^7
+/// samples (minutes of work) and `--time 2`, the bootstrap stops at its share of the budget
+/// and the render returns in about 2 s (bound: 8 s, for a loaded machine), saying so.
+#[test]
+fn mcmc_time_budget_includes_a_huge_bootstrap() {
+    let dir = temp_dir("mcmc-time");
+    let out = dir.join("timed.exr");
+    for integrator in ["pssmlt", "mmlt"] {
+        let start = std::time::Instant::now();
+        let output = chainlight(&[
+            "render",
+            "--integrator",
+            integrator,
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--time",
+            "2",
+            "--bootstrap-samples",
+            "20000000",
+            "--threads",
+            "2",
+            "-o",
+            path_str(&out),
+        ]);
+        let elapsed = start.elapsed();
+        assert!(output.status.success(), "{}", stderr(&output));
+        let text = format!("{}{}", stdout(&output), stderr(&output));
+        assert!(text.contains("bootstrap stopped"), "{text}");
+        assert!(elapsed < std::time::Duration::from_secs(8), "{integrator}: {elapsed:?}");
+        let image = read_exr(&out).unwrap();
+        assert!(image.mean_luminance() > 0.0, "{integrator}: black image");
+    }
+}
