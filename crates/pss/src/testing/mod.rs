@@ -45,5 +45,5 @@ pub use exact::{
     exact_sampler_test, pss_splat_weight_test, pss_stationarity_test, ExactPssTarget, PssBins,
 };
 pub use on_pss::{OnPss, MAX_FIXED_DIM};
-pub use roulette::{RoulettePath, ROULETTE_CELLS};
+pub use roulette::RoulettePath;
 pub use stripes::Stripes;

@@ -7,66 +7,70 @@ use rand::{Rng, RngExt};
 use super::exact::{ExactPssTarget, PssBins};
 use crate::{PssError, PssState};
 
-/// Number of equal cells of `[0, 1)` on which the per-vertex factor is constant.
-pub const ROULETTE_CELLS: usize = 16;
-
-/// Cells where the path continues: `[3/4, 1) u [0, 1/4)`, across the torus seam.
-fn continues(cell: usize) -> bool {
-    !(4..12).contains(&cell)
-}
-
-/// The cell of `u`.
-fn cell_of(u: f64) -> usize {
-    ((u * ROULETTE_CELLS as f64) as usize).min(ROULETTE_CELLS - 1)
-}
+use super::stripes::quarter_cell;
 
 /// Length classes of the bins: 1, 2, 3, 4 and `>= 5`.
 const LENGTH_CLASSES: usize = 5;
 
+/// The kind of a quarter-period cell: 0 continue/high, 1 stop/high, 2 stop/low,
+/// 3 continue/low.
+fn kind(u: f64, periods: usize) -> usize {
+    quarter_cell(u, periods) % 4
+}
+
+/// True if the path continues after a vertex in a cell of this kind.
+fn continues(kind: usize) -> bool {
+    matches!(kind, 0 | 3)
+}
+
 /// A path whose length depends on the state: evaluation reads `u_0, u_1, ...` (stream 0) and
-/// continues after `u_k` while `u_k` lies in the continuation region `C = [3/4, 1) u [0, 1/4)`
-/// (across the torus seam), stopping at the first `u_k` outside it (or giving density 0 if
-/// `max_depth` coordinates were read without stopping). The density of a path of length `L`
-/// is a product of per-vertex factors:
+/// continues after `u_k` while `u_k` lies in the continuation region `C`, stopping at the
+/// first `u_k` outside it (or giving density 0 if `max_depth` coordinates were read without
+/// stopping). The density of a path of length `L` is a product of per-vertex factors:
 ///
 /// ```text
-/// pi(u) = prod_{k < L} f(u_k) / Z,   f piecewise constant on 16 cells,
-/// Z = F_s sum_{l=1}^{D} F_c^(l-1),   F_c = int_C f,  F_s = int_{[0,1) \ C} f.
+/// pi(u) = prod_{k < L} f(u_k) / Z,   Z = F_s sum_{l=1}^{D} F_c^(l-1),
+/// F_c = int_C f = (f_ch + f_cl) / 4,  F_s = int_{[0,1) \ C} f = (f_sh + f_sl) / 4.
 /// ```
 ///
-/// Coordinates after `u_{L-1}` are not read; under `pi` they are independent uniforms. This is
-/// the structure of a path tracer with Russian roulette: a small step that moves `u_{L-1}`
-/// into `C` makes the candidate read `u_L`, which the current state has not read for a while
-/// (or ever). The default factors alternate between large and small values on neighbouring
-/// cells (width 1/16), so what that newly read coordinate is changes acceptance a lot.
+/// `[0, 1)` is cut into `periods` periods of four quarter cells, with factors
+/// `f_ch` (continue), `f_sh`, `f_sl` (stop), `f_cl` (continue): `C` is the union of bands of
+/// width `1 / (2 periods)` centred on the multiples of `1 / periods`, the one at 0 across the
+/// torus seam. Coordinates after `u_{L-1}` are not read; under `pi` they are independent
+/// uniforms. This is the structure of a path tracer with Russian roulette: a small step that
+/// moves `u_{L-1}` into `C` makes the candidate read `u_L`, which the current state has not
+/// read for a while (or ever); with narrow cells and contrasting factors, what that newly read
+/// coordinate is decides acceptance.
 ///
-/// Exact sampler: `P(L = l) = F_c^(l-1) F_s / Z` (drawn by inverse CDF over `l <= D`); given
-/// `L`, the coordinates are independent, `u_k` for `k < L - 1` from `f` restricted to `C`,
-/// `u_{L-1}` from `f` restricted to the stop region (cell by its weight, uniform within).
-/// The start stores the path plus `padding` further uniform coordinates (stale and unread).
+/// Exact sampler: `P(L = l) = F_c^(l-1) F_s / Z` (inverse CDF over `l <= D`); given `L`, the
+/// coordinates are independent, `u_k` for `k < L - 1` from `f` restricted to `C`, `u_{L-1}`
+/// from `f` restricted to the stop region (the kind of cell by its factor, then uniform on
+/// the cells of that kind, by rejection). The start stores the path plus `padding` further
+/// uniform coordinates (stale and unread).
 ///
-/// Bins: (length class 1, 2, 3, 4, `>= 5`) x (cell of `u_0`) x (cell of `u_{L-1}`, for
-/// `L >= 2`), plus one bin of probability 0 for paths of density 0. Probabilities, with cell
-/// weights `w_c = f_c / 16`: `w_a / Z` for `L = 1` (`a` a stop cell) and
-/// `w_a F_c^(l-2) w_b / Z` for `L = l >= 2` (`a` in `C`, `b` a stop cell), summed over
-/// `l = 5..=D` for the last class: exact up to rounding.
-#[derive(Clone, Debug, PartialEq)]
+/// Bins: (length class 1, 2, 3, 4, `>= 5`) x (quarter cell of `u_0`) x (kind of the cell of
+/// `u_{L-1}`, for `L >= 2`), plus one bin of probability 0 for paths of density 0.
+/// Probabilities: `P(L = 1) (f_a / (4 periods)) / F_s` for `L = 1`, `u_0` in cell `a` (a stop
+/// cell), and `P(L = l) (f_a / (4 periods)) / F_c (f_b / 4) / F_s` for `L = l >= 2`, `u_0`
+/// in cell `a` (of `C`) and `u_{L-1}` in a cell of kind `b`, summed over `l >= 5` for the
+/// last class: exact up to rounding.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoulettePath {
-    factors: [f64; ROULETTE_CELLS],
+    periods: usize,
+    /// Factors by cell kind: continue/high, stop/high, stop/low, continue/low.
+    factors: [f64; 4],
     max_depth: usize,
     padding: usize,
 }
 
 impl Default for RoulettePath {
-    /// Factors `2.6 0.6 2.0 0.4 | 0.5 2.0 0.4 1.8 0.6 2.4 0.3 1.6 | 0.5 2.1 0.4 2.8` (the bars
-    /// separate the continuation and stop cells; cells 15 and 0, across the seam, are both
-    /// large): `F_c = 0.7125`, `F_s = 0.6`, mean length 3.5, `P(L >= 5) = 0.26`. Depth at
-    /// most 64, two padding coordinates.
+    /// 8 periods (quarter cells of width 1/32, two Kelemen 2002 steps), factors
+    /// `f_ch = 2.6, f_sh = 2, f_sl = 0.05, f_cl = 0.05` (`F_c = 0.6625`, `F_s = 0.5125`, mean
+    /// length 3.0, `P(L >= 5) = 0.19`), depth at most 64, two padding coordinates.
     fn default() -> Self {
         Self {
-            factors: [
-                2.6, 0.6, 2.0, 0.4, 0.5, 2.0, 0.4, 1.8, 0.6, 2.4, 0.3, 1.6, 0.5, 2.1, 0.4, 2.8,
-            ],
+            periods: 8,
+            factors: [2.6, 2.0, 0.05, 0.05],
             max_depth: 64,
             padding: 2,
         }
@@ -74,35 +78,36 @@ impl Default for RoulettePath {
 }
 
 impl RoulettePath {
-    /// Per-cell factors (positive, finite), the largest path length `max_depth` (1..=256) and
-    /// the number of unread coordinates stored after the path in exact starts (0..=64).
+    /// `periods` (1..=4096) periods of four cells with factors `[f_ch, f_sh, f_sl, f_cl]`
+    /// (positive, finite), the largest path length `max_depth` (1..=256) and the number of
+    /// unread coordinates stored after the path in exact starts (0..=64).
     pub fn new(
-        factors: [f64; ROULETTE_CELLS],
+        periods: usize,
+        factors: [f64; 4],
         max_depth: usize,
         padding: usize,
     ) -> Result<Self, PssError> {
+        let invalid = |name: &'static str, value: String, allowed: &'static str| {
+            Err(PssError::InvalidParameter {
+                name,
+                value,
+                allowed,
+            })
+        };
+        if !(1..=4096).contains(&periods) {
+            return invalid("periods", periods.to_string(), "1..=4096");
+        }
         if let Some(f) = factors.iter().find(|f| !(**f > 0.0 && f.is_finite())) {
-            return Err(PssError::InvalidParameter {
-                name: "factor",
-                value: f.to_string(),
-                allowed: "(0, inf)",
-            });
+            return invalid("factor", f.to_string(), "(0, inf)");
         }
         if !(1..=256).contains(&max_depth) {
-            return Err(PssError::InvalidParameter {
-                name: "max_depth",
-                value: max_depth.to_string(),
-                allowed: "1..=256",
-            });
+            return invalid("max_depth", max_depth.to_string(), "1..=256");
         }
         if padding > 64 {
-            return Err(PssError::InvalidParameter {
-                name: "padding",
-                value: padding.to_string(),
-                allowed: "0..=64",
-            });
+            return invalid("padding", padding.to_string(), "0..=64");
         }
         Ok(Self {
+            periods,
             factors,
             max_depth,
             padding,
@@ -111,15 +116,8 @@ impl RoulettePath {
 
     /// `(F_c, F_s)`: the integrals of the factor over the continuation and stop regions.
     fn region_masses(&self) -> (f64, f64) {
-        let (mut c, mut s) = (0.0, 0.0);
-        for (cell, f) in self.factors.iter().enumerate() {
-            if continues(cell) {
-                c += f / ROULETTE_CELLS as f64;
-            } else {
-                s += f / ROULETTE_CELLS as f64;
-            }
-        }
-        (c, s)
+        let f = &self.factors;
+        ((f[0] + f[3]) / 4.0, (f[1] + f[2]) / 4.0)
     }
 
     /// `P(L = l)` for `l = 1..=max_depth` (index `l - 1`).
@@ -148,33 +146,26 @@ impl RoulettePath {
             if depth == 0 {
                 first = u;
             }
-            let cell = cell_of(u);
-            log_f += self.factors[cell].ln();
-            if !continues(cell) {
+            let k = kind(u, self.periods);
+            log_f += self.factors[k].ln();
+            if !continues(k) {
                 return Some((depth + 1, first, u, log_f));
             }
         }
         None
     }
 
-    /// A uniform draw from the cells with `continues(cell) == want`, each chosen with
-    /// probability proportional to its factor.
+    /// A draw from `f` restricted to the continuation (`want`) or stop region.
     fn draw_in<R: Rng + ?Sized>(&self, rng: &mut R, want: bool) -> f64 {
-        let total: f64 = (0..ROULETTE_CELLS)
-            .filter(|&c| continues(c) == want)
-            .map(|c| self.factors[c])
-            .sum();
-        let mut t = rng.random::<f64>() * total;
-        let mut chosen = None;
-        for c in (0..ROULETTE_CELLS).filter(|&c| continues(c) == want) {
-            chosen = Some(c);
-            if t < self.factors[c] {
-                break;
+        let (a, b) = if want { (0, 3) } else { (1, 2) };
+        let p_a = self.factors[a] / (self.factors[a] + self.factors[b]);
+        let k = if rng.random::<f64>() < p_a { a } else { b };
+        loop {
+            let u: f64 = rng.random();
+            if kind(u, self.periods) == k {
+                return u;
             }
-            t -= self.factors[c];
         }
-        let c = chosen.expect("both regions have cells");
-        (c as f64 + rng.random::<f64>()) / ROULETTE_CELLS as f64
     }
 }
 
@@ -213,11 +204,9 @@ impl ExactPssTarget for RoulettePath {
     }
 
     fn bins(&self) -> PssBins {
-        let n = ROULETTE_CELLS;
+        let cells = 4 * self.periods;
         let lengths = self.length_probabilities();
         let (c_mass, s_mass) = self.region_masses();
-        // P(L = l, u_0 in a, u_{L-1} in b) = P(L = l) (w_a / F_c) (w_b / F_s) for l >= 2.
-        let w = |cell: usize| self.factors[cell] / n as f64;
         let class_probability = |class: usize| -> f64 {
             if class + 1 < LENGTH_CLASSES {
                 lengths.get(class).copied().unwrap_or(0.0)
@@ -225,28 +214,33 @@ impl ExactPssTarget for RoulettePath {
                 lengths.iter().skip(class).sum()
             }
         };
-        let mut probabilities = vec![0.0; n + (LENGTH_CLASSES - 1) * n * n + 1];
-        for a in (0..n).filter(|&a| !continues(a)) {
-            probabilities[a] = class_probability(0) * w(a) / s_mass;
+        // Layout: L = 1 by cell of u_0; then per class >= 1, cell of u_0 x kind of u_{L-1}.
+        let mut probabilities = vec![0.0; cells + (LENGTH_CLASSES - 1) * cells * 4 + 1];
+        let cell_mass = |cell: usize| self.factors[cell % 4] / cells as f64;
+        for a in (0..cells).filter(|a| !continues(a % 4)) {
+            probabilities[a] = class_probability(0) * cell_mass(a) / s_mass;
         }
         for class in 1..LENGTH_CLASSES {
-            for a in (0..n).filter(|&a| continues(a)) {
-                for b in (0..n).filter(|&b| !continues(b)) {
-                    probabilities[n + (class - 1) * n * n + a * n + b] =
-                        class_probability(class) * (w(a) / c_mass) * (w(b) / s_mass);
+            for a in (0..cells).filter(|a| continues(a % 4)) {
+                for b in [1, 2] {
+                    probabilities[cells + ((class - 1) * cells + a) * 4 + b] =
+                        class_probability(class)
+                            * (cell_mass(a) / c_mass)
+                            * (self.factors[b] / 4.0 / s_mass);
                 }
             }
         }
         let overflow = probabilities.len() - 1;
-        let target = self.clone();
+        let target = *self;
         PssBins::new(probabilities, move |x: &PssState| {
             let mut x = x.clone();
             match target.read(&mut x) {
                 None => overflow,
-                Some((1, first, _, _)) => cell_of(first),
+                Some((1, first, _, _)) => quarter_cell(first, target.periods),
                 Some((length, first, last, _)) => {
                     let class = (length - 1).min(LENGTH_CLASSES - 1);
-                    n + (class - 1) * n * n + cell_of(first) * n + cell_of(last)
+                    let a = quarter_cell(first, target.periods);
+                    cells + ((class - 1) * cells + a) * 4 + kind(last, target.periods)
                 }
             }
         })
@@ -276,7 +270,7 @@ mod tests {
     /// fresh uniforms `U`, `E[pi(U) 1_b(U)] = p_b` (importance sampling from the uniform
     /// measure on the unit cube, of which the read coordinates are a marginal). 400k fresh
     /// states; each bin's estimate must lie within 5 standard errors (+1e-4) of `p_b`
-    /// (family-wise false-failure probability below 1e-4 over the 265 bins).
+    /// (family-wise false-failure probability below 1e-4 over the bins).
     #[test]
     fn evaluation_matches_the_bins() {
         let t = RoulettePath::default();
@@ -320,11 +314,12 @@ mod tests {
     #[test]
     fn rejects_bad_parameters() {
         let f = RoulettePath::default().factors;
-        assert!(RoulettePath::new(f, 0, 2).is_err());
-        assert!(RoulettePath::new(f, 64, 65).is_err());
+        assert!(RoulettePath::new(16, f, 0, 2).is_err());
+        assert!(RoulettePath::new(16, f, 64, 65).is_err());
+        assert!(RoulettePath::new(0, f, 64, 2).is_err());
         let mut g = f;
         g[3] = 0.0;
-        assert!(RoulettePath::new(g, 64, 2).is_err());
-        assert!(RoulettePath::new(f, 64, 2).is_ok());
+        assert!(RoulettePath::new(16, g, 64, 2).is_err());
+        assert!(RoulettePath::new(16, f, 64, 2).is_ok());
     }
 }
