@@ -37,7 +37,12 @@ fn grw(sigma: f64) -> Mh<GaussianRandomWalk> {
     Mh::new(GaussianRandomWalk::new(sigma).unwrap())
 }
 
-fn check<T: ToyTarget, K: Kernel<T> + Clone>(what: &str, target: &T, kernel: &K, seed: u64) -> SplatWeightReport {
+fn check<T: ToyTarget, K: Kernel<T> + Clone>(
+    what: &str,
+    target: &T,
+    kernel: &K,
+    seed: u64,
+) -> SplatWeightReport {
     let report = toy_splat_weight_test(target, kernel, &SplatParams::new(STARTS, seed));
     eprintln!("{what}: {report}");
     report
@@ -106,7 +111,12 @@ fn dropping_the_current_state_splat_fails() {
     let states = toy_stationarity_test(&target, &bad, &StationarityParams::new(10_000, 20, 6));
     eprintln!("without the current-state splat: stationarity of states {states}");
     states.assert_passes("states of MH without the current-state splat", SPLAT_TESTS);
-    let report = check("uniform mixture / without the current-state splat", &target, &bad, 6);
+    let report = check(
+        "uniform mixture / without the current-state splat",
+        &target,
+        &bad,
+        6,
+    );
     assert!(report.mean_total_weight < 0.9, "{report}");
     assert!(report.p_value < OVERWHELMING, "{report}");
 }
@@ -118,7 +128,12 @@ fn dropping_the_current_state_splat_fails() {
 fn forced_acceptance_with_weight_one_fails() {
     let target = UniformMixture::rioux_lavoie2020();
     let bad = SplatFinalState(ForcedAcceptance::new(grw(0.5), 0));
-    let report = check("uniform mixture / forced acceptance, weight 1", &target, &bad, 7);
+    let report = check(
+        "uniform mixture / forced acceptance, weight 1",
+        &target,
+        &bad,
+        7,
+    );
     assert!(report.p_value < OVERWHELMING, "{report}");
     // The same bug on the torus target (forced acceptance takes candidates of positive
     // density only, so the weight stays on the torus but drifts out of the modes).

@@ -310,7 +310,11 @@ fn hotelling(covariance: &DMatrix<f64>, deviation: &DVector<f64>, n: f64) -> (f6
 }
 
 /// [`splat_weight_test`] for a toy target, with its exact sampler and default bins.
-pub fn toy_splat_weight_test<T, K>(target: &T, kernel: &K, params: &SplatParams) -> SplatWeightReport
+pub fn toy_splat_weight_test<T, K>(
+    target: &T,
+    kernel: &K,
+    params: &SplatParams,
+) -> SplatWeightReport
 where
     T: ToyTarget,
     K: Kernel<T> + Clone,

@@ -120,7 +120,10 @@ pub fn kolmogorov_survival(lambda: f64) -> f64 {
 /// If either sample is empty.
 #[must_use]
 pub fn ks_two_sample(a: &[f64], b: &[f64]) -> KsReport {
-    assert!(!a.is_empty() && !b.is_empty(), "both samples must be non-empty");
+    assert!(
+        !a.is_empty() && !b.is_empty(),
+        "both samples must be non-empty"
+    );
     let mut a = a.to_vec();
     let mut b = b.to_vec();
     a.sort_by(f64::total_cmp);
