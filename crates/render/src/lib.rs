@@ -6,6 +6,7 @@
 //! Markov chains (PSSMLT, MMLT, DRMLT, MALA).
 
 pub mod bdpt;
+pub mod budget;
 pub mod bvh;
 pub mod camera;
 pub mod error;

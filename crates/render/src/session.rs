@@ -3,21 +3,16 @@
 //! CONTRACT (kept stable for the CLI): `RenderSettings`, `IntegratorKind`, `Progress`,
 //! `RenderOutput` and `render(scene, settings, progress, cancel)`.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
-
-use glam::UVec2;
-use rayon::prelude::*;
 
 use crate::bdpt::{self, BdptParams};
 use crate::error::RenderError;
-use crate::film::{tiles, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
-use crate::integrator::pt;
+use crate::integrator::pt_driver::{self, PtSettings};
 use crate::mlt::{
     self, LargeStepMode, MltBudget, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS,
 };
-use crate::sampler::IndependentSampler;
 use crate::scene::Scene;
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
@@ -54,14 +49,8 @@ impl Default for McmcSettings {
 /// Default mutations per chain in the estimation phase of automatic large-step control.
 pub const AUTO_LARGE_STEP_ESTIMATION: u64 = 1_000;
 
-/// How long to render: a sample count per pixel or a wall-clock budget.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Budget {
-    /// Samples (or, for MCMC integrators, mutations) per pixel.
-    SamplesPerPixel(u32),
-    /// Wall-clock time; the image is not bit-reproducible under this budget.
-    Time(Duration),
-}
+/// How long to render: defined in its own leaf module, shared with the drivers.
+pub use crate::budget::Budget;
 
 /// Everything a render needs besides the scene.
 #[derive(Clone, Debug)]
@@ -126,8 +115,8 @@ pub struct RenderOutput {
     pub strategy_images: Vec<((u8, u8), Image)>,
 }
 
-/// Edge length of the square tiles that are the work units of a render (and its merge order).
-pub const TILE_SIZE: usize = 16;
+/// Edge length of PT's square tiles: defined with the PT driver.
+pub use crate::integrator::pt_driver::TILE_SIZE;
 
 /// Largest accepted image side.
 pub const MAX_RESOLUTION: u32 = 1 << 16;
@@ -182,19 +171,15 @@ pub fn validate(settings: &RenderSettings) -> Result<(), RenderError> {
     }
 }
 
-/// Renders `scene` with `settings`: the film is split into [`TILE_SIZE`] tiles (the work
-/// units), rendered in passes by a pool of `settings.threads` rayon threads and merged in tile
-/// order, with a box filter of one pixel. Every random number is keyed by (seed, pixel,
-/// sample index, dimension), so under [`Budget::SamplesPerPixel`] the image is bit-identical
-/// for any thread count.
+/// Renders `scene` with `settings` on a pool of `settings.threads` rayon threads: validates
+/// the settings and dispatches to the integrator's driver (PT:
+/// [`render_pt`](crate::integrator::pt_driver::render_pt), BDPT:
+/// [`render_bdpt`](crate::bdpt::render_bdpt), PSSMLT and MMLT: the MCMC render loop).
 ///
-/// * `SamplesPerPixel(n)`: passes of `ceil(n / 16)` samples per pixel (fewer in the last).
-/// * `Time(d)`: passes of one sample per pixel until `d` has elapsed; after the first pass,
-///   tiles not started before the deadline are skipped.
-/// * `cancel` is checked before each tile; a cancelled render returns the samples merged so
-///   far (each pixel normalised by its own filter weight) with `cancelled: true`.
-///
-/// Progress is reported in pixel samples.
+/// Under [`Budget::SamplesPerPixel`] the image is bit-identical for any thread count. Setting
+/// `cancel` stops the render within a fraction of a second (PT and BDPT check it between two
+/// samples of a work unit) and returns the samples taken so far, each pixel normalised by
+/// its own samples, with `cancelled: true`.
 ///
 /// # Errors
 /// [`RenderError::InvalidSetting`] for out-of-range settings, [`RenderError::ThreadPool`] if
@@ -216,7 +201,9 @@ pub fn render(
             reason: e.to_string(),
         })?;
     match settings.integrator {
-        IntegratorKind::Pt => render_pt(scene, settings, &pool, start, progress, cancel),
+        IntegratorKind::Pt => {
+            Ok(pool.install(|| render_pt(scene, settings, start, progress, cancel)))
+        }
         IntegratorKind::Bdpt | IntegratorKind::Pssmlt | IntegratorKind::Mmlt => {
             // BDPT and the MCMC targets use the scene's camera: set it to the image size.
             let mut sized;
@@ -229,14 +216,92 @@ pub fn render(
                 sized.set_resolution(settings.width, settings.height);
                 &sized
             };
-            let out =
-                pool.install(|| render_bidirectional(scene, settings, start, progress, cancel));
+            let out = pool.install(|| {
+                if settings.integrator == IntegratorKind::Bdpt {
+                    render_bdpt(scene, settings, start, progress, cancel)
+                } else {
+                    render_bidirectional(scene, settings, start, progress, cancel)
+                }
+            });
             Ok(out)
         }
     }
 }
 
-/// BDPT, PSSMLT and MMLT.
+/// A note for the output if the scene has no emitters.
+fn emitter_notes(scene: &Scene) -> Vec<String> {
+    if scene.lights().is_empty() {
+        vec!["the scene has no emitters: the image is black".to_owned()]
+    } else {
+        Vec::new()
+    }
+}
+
+/// PT through its driver.
+fn render_pt(
+    scene: &Scene,
+    settings: &RenderSettings,
+    start: Instant,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> RenderOutput {
+    let pt_settings = PtSettings {
+        width: settings.width,
+        height: settings.height,
+        max_depth: settings.max_depth,
+        budget: settings.budget,
+        seed: settings.seed,
+    };
+    let out = pt_driver::render_pt(scene, &pt_settings, progress, cancel);
+    RenderOutput {
+        image: out.image,
+        samples: out.samples,
+        dropped_nonfinite: out.dropped_nonfinite,
+        cancelled: out.cancelled,
+        elapsed: start.elapsed(),
+        notes: emitter_notes(scene),
+        strategy_images: Vec::new(),
+    }
+}
+
+/// BDPT through its driver (`scene` already at the image size).
+fn render_bdpt(
+    scene: &Scene,
+    settings: &RenderSettings,
+    start: Instant,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> RenderOutput {
+    let params = BdptParams {
+        max_depth: settings.max_depth,
+        ..BdptParams::default()
+    };
+    let (spp, time) = match settings.budget {
+        Budget::SamplesPerPixel(n) => (Some(n), None),
+        Budget::Time(t) => (None, Some(t)),
+    };
+    let out = bdpt::render_bdpt(
+        scene,
+        &params,
+        spp,
+        time,
+        settings.seed,
+        settings.strategy_images,
+        progress,
+        cancel,
+    );
+    RenderOutput {
+        samples: out.samples,
+        image: out.image,
+        dropped_nonfinite: out.dropped,
+        cancelled: out.cancelled,
+        elapsed: start.elapsed(),
+        notes: emitter_notes(scene),
+        strategy_images: out.strategy_images,
+    }
+}
+
+/// PSSMLT and MMLT.
 fn render_bidirectional(
     scene: &Scene,
     settings: &RenderSettings,
@@ -249,35 +314,7 @@ fn render_bidirectional(
         ..BdptParams::default()
     };
     let (w, h) = (settings.width, settings.height);
-    let mut notes = Vec::new();
-    if scene.lights().is_empty() {
-        notes.push("the scene has no emitters: the image is black".to_owned());
-    }
-    if settings.integrator == IntegratorKind::Bdpt {
-        let (spp, time) = match settings.budget {
-            Budget::SamplesPerPixel(n) => (Some(n), None),
-            Budget::Time(t) => (None, Some(t)),
-        };
-        let out = bdpt::render_bdpt(
-            scene,
-            &params,
-            spp,
-            time,
-            settings.seed,
-            settings.strategy_images,
-            progress,
-            cancel,
-        );
-        return RenderOutput {
-            samples: u64::from(out.spp) * u64::from(w) * u64::from(h),
-            image: out.image,
-            dropped_nonfinite: out.dropped,
-            cancelled: out.cancelled,
-            elapsed: start.elapsed(),
-            notes,
-            strategy_images: out.strategy_images,
-        };
-    }
+    let mut notes = emitter_notes(scene);
     let m = &settings.mcmc;
     let mlt_settings = MltSettings {
         width: w as usize,
@@ -337,113 +374,6 @@ fn render_bidirectional(
     }
 }
 
-/// Unidirectional path tracing over fixed tiles.
-fn render_pt(
-    scene: &Scene,
-    settings: &RenderSettings,
-    pool: &rayon::ThreadPool,
-    start: Instant,
-    progress: &dyn Progress,
-    cancel: &AtomicBool,
-) -> Result<RenderOutput, RenderError> {
-    let (w, h) = (settings.width, settings.height);
-    let camera = scene.camera_spec().build(w, h);
-    let mut film = Film::new(w as usize, h as usize, Filter::BOX);
-    let work = tiles(w as usize, h as usize, TILE_SIZE);
-    let pixels = u64::from(w) * u64::from(h);
-
-    let render_tile = |rect: PixelRect, first: u32, count: u32| -> FilmTile {
-        let mut tile = FilmTile::new(w as usize, h as usize, Filter::BOX, rect);
-        let mut sampler = IndependentSampler::new(settings.seed);
-        for y in rect.y0..rect.y1 {
-            for x in rect.x0..rect.x1 {
-                let pixel_index = y as u64 * u64::from(w) + x as u64;
-                for s in first..first + count {
-                    sampler.start_pixel_sample(pixel_index, u64::from(s));
-                    let (p, l) = pt::sample_pixel(
-                        scene,
-                        &camera,
-                        UVec2::new(x as u32, y as u32),
-                        &mut sampler,
-                        settings.max_depth,
-                    );
-                    tile.add_sample(p, l);
-                }
-            }
-        }
-        progress.advance(rect.area() as u64 * u64::from(count));
-        tile
-    };
-
-    let mut cancelled = false;
-    match settings.budget {
-        Budget::SamplesPerPixel(spp) => {
-            progress.set_total(pixels * u64::from(spp));
-            let per_pass = spp.div_ceil(16).max(1);
-            let mut first = 0;
-            while first < spp && !cancelled {
-                let count = per_pass.min(spp - first);
-                let done: Vec<Option<FilmTile>> = pool.install(|| {
-                    work.par_iter()
-                        .map(|&rect| {
-                            (!cancel.load(Ordering::Relaxed))
-                                .then(|| render_tile(rect, first, count))
-                        })
-                        .collect()
-                });
-                for tile in &done {
-                    match tile {
-                        Some(t) => film.merge_tile(t),
-                        None => cancelled = true,
-                    }
-                }
-                first += count;
-            }
-        }
-        Budget::Time(limit) => {
-            let deadline = start + limit;
-            let mut pass = 0u32;
-            loop {
-                let done: Vec<Option<FilmTile>> = pool.install(|| {
-                    work.par_iter()
-                        .map(|&rect| {
-                            let late = pass > 0 && Instant::now() >= deadline;
-                            (!cancel.load(Ordering::Relaxed) && !late)
-                                .then(|| render_tile(rect, pass, 1))
-                        })
-                        .collect()
-                });
-                for t in done.iter().flatten() {
-                    film.merge_tile(t);
-                }
-                pass += 1;
-                if cancel.load(Ordering::Relaxed) {
-                    cancelled = true;
-                    break;
-                }
-                let elapsed = start.elapsed();
-                if elapsed >= limit {
-                    break;
-                }
-                // Estimated total work so a progress bar can show an ETA.
-                let passes = (limit.as_secs_f64() / elapsed.as_secs_f64() * f64::from(pass))
-                    .ceil()
-                    .max(f64::from(pass + 1));
-                progress.set_total(pixels * passes as u64);
-            }
-        }
-    }
-    Ok(RenderOutput {
-        image: film.image(0.0),
-        samples: film.samples,
-        dropped_nonfinite: film.nonfinite,
-        cancelled,
-        elapsed: start.elapsed(),
-        notes: Vec::new(),
-        strategy_images: Vec::new(),
-    })
-}
-
 /// Renders the built-in Cornell box at `size x size` with `spp` samples per pixel on one
 /// thread: a convenience for examples and doc tests.
 ///
@@ -467,6 +397,7 @@ pub fn render_cornell_box(size: u32, spp: u32, seed: u64) -> Result<Image, Rende
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::atomic::Ordering;
 
     fn settings() -> RenderSettings {
         RenderSettings {

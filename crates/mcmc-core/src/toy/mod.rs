@@ -38,6 +38,8 @@ pub mod special;
 mod torus_mixture;
 mod uniform_mixture;
 
+/// Re-exported from [`crate::torus`], where it lives.
+pub use crate::torus::wrap;
 pub use banana::Banana;
 pub use bins::{uniform_edges, Bins};
 pub use correlated_gaussian::CorrelatedGaussian;
@@ -45,8 +47,6 @@ pub use gaussian_mixture::{DiagonalGaussian, GaussianMixture2d, MAX_MIXTURE_COMP
 pub use piecewise::PiecewiseConstant;
 pub use ridge::Ridge;
 pub use torus_mixture::{wrapped_normal_pdf, TorusMixture};
-/// Re-exported from [`crate::torus`], where it lives.
-pub use crate::torus::wrap;
 pub use uniform_mixture::UniformMixture;
 
 use rand::Rng;

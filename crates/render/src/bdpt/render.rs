@@ -1,17 +1,19 @@
-//! Independent BDPT rendering of a whole image: fixed row bands, counter-based samples,
-//! light-tracing splats, optional per-strategy images.
+//! The BDPT driver: a whole image rendered with independent BDPT samples in fixed row bands,
+//! with light-tracing splats and optional per-strategy images, cancellable between two pixel
+//! samples.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
+use mcmc_core::render_loop::{SplatGrid, SplatSink};
+use mcmc_core::Progress;
 use rayon::prelude::*;
 
-use super::{sample, BdptParams, BdptScratch, SceneRef};
+use super::{sample, BdptParams, BdptScratch, SceneRef, StrategySplat, MAX_VERTICES};
+use crate::film::{Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
-use crate::mlt::SplatBuffer;
-use crate::sampler::IndependentSampler;
-use crate::session::Progress;
+use crate::sampler::{IndependentSampler, Sampler};
 
 /// Number of fixed row bands (work units): the image does not depend on the thread count.
 const BANDS: usize = 8;
@@ -21,8 +23,10 @@ const BANDS: usize = 8;
 pub struct BdptOutput {
     /// The image.
     pub image: Image,
-    /// Samples per pixel actually rendered.
+    /// Complete passes: samples per pixel that every pixel received.
     pub spp: u32,
+    /// Camera samples taken (pixel samples; more than `spp` per pixel if a pass was cut short).
+    pub samples: u64,
     /// Non-finite contributions dropped.
     pub dropped: u64,
     /// True if cancelled early.
@@ -31,19 +35,166 @@ pub struct BdptOutput {
     pub strategy_images: Vec<((u8, u8), Image)>,
 }
 
+/// The strategies `(s, t)` that can contribute at a maximum depth, split by where their
+/// contributions land: camera-side strategies (`t >= 2`) in the sampled pixel, light tracing
+/// (`t = 1`) anywhere on the image.
+struct Strategies {
+    /// `s * stride + t` indexes `slot`.
+    stride: usize,
+    /// The strategy's index in `camera` or `light` (by `t`), `usize::MAX` if it cannot occur.
+    slot: Vec<usize>,
+    camera: Vec<(u8, u8)>,
+    light: Vec<(u8, u8)>,
+}
+
+impl Strategies {
+    fn new(max_depth: u32) -> Self {
+        let depth = (max_depth as usize).min(MAX_VERTICES - 2);
+        let stride = depth + 3;
+        let mut slot = vec![usize::MAX; stride * stride];
+        let (mut camera, mut light) = (Vec::new(), Vec::new());
+        for s in 0..stride {
+            for t in 1..stride {
+                if (s == 1 && t == 1) || s + t < 2 || s + t - 2 > depth {
+                    continue;
+                }
+                let list = if t == 1 { &mut light } else { &mut camera };
+                slot[s * stride + t] = list.len();
+                list.push((s as u8, t as u8));
+            }
+        }
+        Self {
+            stride,
+            slot,
+            camera,
+            light,
+        }
+    }
+
+    fn slot(&self, s: u8, t: u8) -> usize {
+        self.slot[s as usize * self.stride + t as usize]
+    }
+}
+
+/// What one band accumulates. Camera-side contributions of a sample are summed and added as
+/// one pixel sample (the pixel's mean over its own samples); light-tracing splats are summed
+/// over the whole image and scaled by pixels / samples at the end (pbrt-v3's splat scale).
 struct Band {
     rows: std::ops::Range<usize>,
-    buffer: SplatBuffer,
-    strategies: Vec<SplatBuffer>,
+    camera: FilmTile,
+    light: SplatGrid,
+    /// Per camera-side strategy (only with strategy images).
+    strategy_camera: Vec<FilmTile>,
+    /// Per light-tracing strategy (only with strategy images).
+    strategy_light: Vec<SplatGrid>,
+    /// The current sample's contribution of each camera-side strategy.
+    strategy_sums: Vec<Vec3>,
+    samples: u64,
     dropped: u64,
     scratch: BdptScratch,
 }
 
+/// The per-pass inputs every band shares.
+struct Pass<'a> {
+    scene: SceneRef<'a>,
+    params: &'a BdptParams,
+    strategies: &'a Strategies,
+    seed: u64,
+    index: u32,
+    /// Rows not started by then are skipped (time budgets, after the first pass).
+    deadline: Option<Instant>,
+    progress: &'a dyn Progress,
+    cancel: &'a AtomicBool,
+}
+
+impl Band {
+    /// Takes sample `pass.index` of every pixel of the band in row-major order; returns false
+    /// if `cancel` (checked before every pixel) or the deadline (before every row) stopped it.
+    fn render(&mut self, pass: &Pass<'_>) -> bool {
+        let w = self.light.width();
+        let mut sampler = IndependentSampler::new(pass.seed);
+        for y in self.rows.clone() {
+            if pass.deadline.is_some_and(|d| Instant::now() >= d) {
+                return false;
+            }
+            for x in 0..w {
+                if pass.cancel.load(Ordering::Relaxed) {
+                    pass.progress.advance(x as u64);
+                    return false;
+                }
+                sampler.start_pixel_sample((y * w + x) as u64, u64::from(pass.index));
+                let p_raster = Vec2::new(x as f32, y as f32) + sampler.next_2d();
+                self.sample(pass, &mut sampler, p_raster);
+            }
+            pass.progress.advance(w as u64);
+        }
+        true
+    }
+
+    /// One BDPT sample through `p_raster`.
+    fn sample(&mut self, pass: &Pass<'_>, sampler: &mut IndependentSampler, p_raster: Vec2) {
+        let Band {
+            camera,
+            light,
+            strategy_camera,
+            strategy_light,
+            strategy_sums,
+            samples,
+            dropped,
+            scratch,
+            ..
+        } = self;
+        let per_strategy = !strategy_sums.is_empty();
+        strategy_sums.fill(Vec3::ZERO);
+        let mut l_camera = Vec3::ZERO;
+        let sink = |sp: StrategySplat| {
+            let slot = || pass.strategies.slot(sp.s, sp.t);
+            if !sp.l.is_finite() {
+                *dropped += 1;
+            } else if sp.t == 1 {
+                let (raster, rgb) = (sp.p_raster.to_array(), sp.l.to_array());
+                if !light.add_rgb(raster, rgb, 1.0) {
+                    *dropped += 1;
+                } else if per_strategy {
+                    strategy_light[slot()].add_rgb(raster, rgb, 1.0);
+                }
+            } else {
+                l_camera += sp.l;
+                if per_strategy {
+                    strategy_sums[slot()] += sp.l;
+                }
+            }
+        };
+        sample(
+            pass.scene,
+            sampler,
+            p_raster,
+            pass.params,
+            true,
+            scratch,
+            sink,
+        );
+        camera.add_sample(p_raster, l_camera);
+        for (tile, &l) in strategy_camera.iter_mut().zip(strategy_sums.iter()) {
+            tile.add_sample(p_raster, l);
+        }
+        *samples += 1;
+    }
+}
+
 /// Renders `scene` with BDPT at its camera's resolution: `spp` samples per pixel (or until
-/// `time` has passed, in passes of one sample per pixel), `seed` keys every random number by
-/// (pixel, sample index), so the image is independent of the thread count. Every contribution
-/// (light tracing included) is box-filtered into the pixel it lands in and the sum is divided
-/// by the number of samples per pixel (pbrt-v3's splat normalisation).
+/// `time` has passed, or until cancelled if neither is given), in passes of one sample per
+/// pixel over fixed row bands. `seed` keys every random number by (pixel, sample index), so
+/// the image is independent of the thread count.
+///
+/// Camera-side contributions (`t >= 2`) are box-filtered into the sampled pixel and every
+/// pixel is the mean over its own samples; light-tracing contributions (`t = 1`) land where
+/// they project and are scaled by pixels / camera samples (pbrt-v3's splat normalisation, one
+/// light subpath per camera sample). Both are unbiased for any per-pixel sample counts, so
+/// the image stays a correct average when a pass is cut short: `cancel` is checked before
+/// every pixel sample (a cancelled render returns within a fraction of a second at any
+/// `spp`), and under a time budget rows not started by the deadline are skipped after the
+/// first pass. Progress is reported in pixel samples.
 #[allow(clippy::too_many_arguments)]
 pub fn render_bdpt(
     scene: SceneRef<'_>,
@@ -55,102 +206,215 @@ pub fn render_bdpt(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> BdptOutput {
+    let start = Instant::now();
     let (w, h) = (
         scene.camera().width() as usize,
         scene.camera().height() as usize,
     );
-    let n_strategies = (params.max_depth as usize + 3) * (params.max_depth as usize + 3);
+    let strategies = Strategies::new(params.max_depth);
     let mut bands: Vec<Band> = (0..BANDS)
-        .map(|b| Band {
-            rows: (b * h / BANDS)..((b + 1) * h / BANDS),
-            buffer: SplatBuffer::new(w, h),
-            strategies: if strategy_images {
-                vec![SplatBuffer::new(w, h); n_strategies]
+        .map(|b| {
+            let rows = (b * h / BANDS)..((b + 1) * h / BANDS);
+            let rect = PixelRect {
+                x0: 0,
+                y0: rows.start,
+                x1: w,
+                y1: rows.end,
+            };
+            let tile = || FilmTile::new(w, h, Filter::BOX, rect);
+            let (n_camera, n_light) = if strategy_images {
+                (strategies.camera.len(), strategies.light.len())
             } else {
-                Vec::new()
-            },
-            dropped: 0,
-            scratch: BdptScratch::default(),
+                (0, 0)
+            };
+            Band {
+                rows,
+                camera: tile(),
+                light: SplatGrid::new(w, h),
+                strategy_camera: (0..n_camera).map(|_| tile()).collect(),
+                strategy_light: vec![SplatGrid::new(w, h); n_light],
+                strategy_sums: vec![Vec3::ZERO; n_camera],
+                samples: 0,
+                dropped: 0,
+                scratch: BdptScratch::default(),
+            }
         })
         .collect();
     let total_spp = spp.unwrap_or(u32::MAX);
     if let Some(n) = spp {
         progress.set_total(u64::from(n) * (w * h) as u64);
     }
-    let start = Instant::now();
     let mut done = 0u32;
-    let mut cancelled = false;
-    let stride = params.max_depth as usize + 3;
-    while done < total_spp {
-        if cancel.load(Ordering::Relaxed) {
-            cancelled = true;
+    let mut stopped = false;
+    while done < total_spp && !stopped {
+        let pass = Pass {
+            scene,
+            params,
+            strategies: &strategies,
+            seed,
+            index: done,
+            deadline: time.filter(|_| done > 0).map(|t| start + t),
+            progress,
+            cancel,
+        };
+        if pass.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        if time.is_some_and(|t| start.elapsed() >= t) {
-            break;
-        }
-        let pass = done;
-        bands.par_iter_mut().for_each(|band| {
-            let mut sampler = IndependentSampler::new(seed);
-            let Band {
-                rows,
-                buffer,
-                strategies,
-                dropped,
-                scratch,
-            } = band;
-            for y in rows.clone() {
-                for x in 0..w {
-                    let pixel = (y * w + x) as u64;
-                    sampler.start_pixel_sample(pixel, u64::from(pass));
-                    let jitter = crate::sampler::Sampler::next_2d(&mut sampler);
-                    let p_raster = Vec2::new(x as f32, y as f32) + jitter;
-                    sample(scene, &mut sampler, p_raster, params, true, scratch, |sp| {
-                        let rgb = sp.l.to_array();
-                        if !buffer.add(sp.p_raster.to_array(), rgb, 1.0) {
-                            *dropped += 1;
-                        } else if !strategies.is_empty() {
-                            strategies[sp.s as usize * stride + sp.t as usize].add(
-                                sp.p_raster.to_array(),
-                                rgb,
-                                1.0,
-                            );
-                        }
-                    });
-                }
-                progress.advance(w as u64);
-            }
-        });
-        done += 1;
-    }
-    let mut total = SplatBuffer::new(w, h);
-    let mut per_strategy =
-        vec![SplatBuffer::new(w, h); if strategy_images { n_strategies } else { 0 }];
-    let mut dropped = 0;
-    for band in &bands {
-        total.merge(&band.buffer);
-        dropped += band.dropped;
-        for (acc, b) in per_strategy.iter_mut().zip(&band.strategies) {
-            acc.merge(b);
+        let complete: Vec<bool> = bands.par_iter_mut().map(|b| b.render(&pass)).collect();
+        stopped = complete.contains(&false) || cancel.load(Ordering::Relaxed);
+        if complete.iter().all(|&c| c) {
+            done += 1;
         }
     }
-    let scale = if done == 0 {
+    let cancelled = cancel.load(Ordering::Relaxed) && done < total_spp;
+
+    let samples: u64 = bands.iter().map(|b| b.samples).sum();
+    let light_scale = if samples == 0 {
         0.0
     } else {
-        1.0 / f64::from(done)
+        (w * h) as f64 / samples as f64
     };
-    let strategy_images = per_strategy
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| (i / stride) + (i % stride) >= 2 && i % stride >= 1)
-        .map(|(i, b)| (((i / stride) as u8, (i % stride) as u8), b.to_image(scale)))
-        .filter(|(_, img)| img.pixels.iter().any(|p| p.iter().any(|&c| c != 0.0)))
-        .collect();
+    let layers = bands.iter().map(|b| (Some(&b.camera), Some(&b.light)));
+    let image = merge_layers(w, h, light_scale, layers);
+    let strategy_images = if strategy_images {
+        let camera = strategies.camera.iter().enumerate().map(|(i, &st)| {
+            let layers = bands.iter().map(|b| (Some(&b.strategy_camera[i]), None));
+            (st, merge_layers(w, h, light_scale, layers))
+        });
+        let light = strategies.light.iter().enumerate().map(|(i, &st)| {
+            let layers = bands.iter().map(|b| (None, Some(&b.strategy_light[i])));
+            (st, merge_layers(w, h, light_scale, layers))
+        });
+        let mut all: Vec<((u8, u8), Image)> = camera
+            .chain(light)
+            .filter(|(_, img)| img.pixels.iter().any(|p| p.iter().any(|&c| c != 0.0)))
+            .collect();
+        all.sort_by_key(|&(st, _)| st);
+        all
+    } else {
+        Vec::new()
+    };
     BdptOutput {
-        image: total.to_image(scale),
+        image,
         spp: done,
-        dropped,
+        samples,
+        dropped: bands.iter().map(|b| b.dropped).sum(),
         cancelled,
         strategy_images,
+    }
+}
+
+/// The image of the bands' layers, merged in band order: the mean of the camera tiles' pixel
+/// samples plus `light_scale` times the light grids' sums.
+fn merge_layers<'a>(
+    w: usize,
+    h: usize,
+    light_scale: f64,
+    bands: impl Iterator<Item = (Option<&'a FilmTile>, Option<&'a SplatGrid>)>,
+) -> Image {
+    let mut film = Film::new(w, h, Filter::BOX);
+    let mut light = SplatGrid::new(w, h);
+    for (camera, splats) in bands {
+        if let Some(tile) = camera {
+            film.merge_tile(tile);
+        }
+        if let Some(grid) = splats {
+            light.merge(grid);
+        }
+    }
+    let mut image = film.image(0.0);
+    for (px, l) in image.pixels.iter_mut().zip(light.pixels()) {
+        for c in 0..3 {
+            px[c] = (f64::from(px[c]) + l[c] * light_scale) as f32;
+        }
+    }
+    image
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Scene;
+    use std::sync::atomic::AtomicU64;
+
+    /// Sets `flag` after `after` progress reports (one per band row).
+    struct CancelAfter<'a> {
+        flag: &'a AtomicBool,
+        after: u64,
+        seen: AtomicU64,
+    }
+
+    impl Progress for CancelAfter<'_> {
+        fn set_total(&self, _: u64) {}
+        fn advance(&self, _: u64) {
+            if self.seen.fetch_add(1, Ordering::Relaxed) + 1 >= self.after {
+                self.flag.store(true, Ordering::Relaxed);
+            }
+        }
+    }
+
+    #[test]
+    fn cancel_stops_within_a_pass() {
+        let scene = Scene::cornell_box(16, 16);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let flag = AtomicBool::new(false);
+        // A pass is 16 rows: stop after the 4th row of the second pass.
+        let progress = CancelAfter {
+            flag: &flag,
+            after: 20,
+            seen: AtomicU64::new(0),
+        };
+        let params = BdptParams::default();
+        let out = pool.install(|| {
+            render_bdpt(
+                &scene,
+                &params,
+                Some(1_000_000),
+                None,
+                3,
+                false,
+                &progress,
+                &flag,
+            )
+        });
+        assert!(out.cancelled);
+        assert_eq!(out.spp, 1);
+        assert_eq!(out.samples, 20 * 16);
+        assert_eq!(out.image.count_nonfinite(), 0);
+    }
+
+    #[test]
+    fn strategy_images_sum_to_the_image_after_a_cut_pass() {
+        let scene = Scene::cornell_box(16, 16);
+        let flag = AtomicBool::new(false);
+        let progress = CancelAfter {
+            flag: &flag,
+            after: 40,
+            seen: AtomicU64::new(0),
+        };
+        let params = BdptParams {
+            max_depth: 3,
+            ..BdptParams::default()
+        };
+        let out = render_bdpt(&scene, &params, Some(1000), None, 5, true, &progress, &flag);
+        assert!(out.cancelled && out.samples > 16 * 16 * 2 && out.samples < 16 * 16 * 3);
+        assert!(out.strategy_images.iter().any(|((_, t), _)| *t == 1));
+        assert!(out.strategy_images.iter().any(|((_, t), _)| *t >= 2));
+        for (i, px) in out.image.pixels.iter().enumerate() {
+            for (c, &value) in px.iter().enumerate() {
+                let sum: f32 = out
+                    .strategy_images
+                    .iter()
+                    .map(|(_, img)| img.pixels[i][c])
+                    .sum();
+                assert!(
+                    (sum - value).abs() <= 1e-4 * value.abs().max(1.0),
+                    "pixel {i}: {sum} vs {value}"
+                );
+            }
+        }
     }
 }

@@ -3,6 +3,7 @@
 //! table of integrators ([`INTEGRATORS`]).
 
 pub mod pt;
+pub mod pt_driver;
 mod table;
 
 pub use table::{IntegratorInfo, IntegratorKind, INTEGRATORS};

@@ -1,0 +1,252 @@
+//! The path-tracing driver: a whole image rendered with [`pt::sample_pixel`] over fixed tiles,
+//! in passes, merged in tile order, and cancellable between two samples of a tile.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use glam::UVec2;
+use mcmc_core::Progress;
+use rayon::prelude::*;
+
+use super::pt;
+use crate::budget::Budget;
+use crate::film::{tiles, Film, FilmTile, Filter, PixelRect};
+use crate::image::Image;
+use crate::sampler::IndependentSampler;
+use crate::scene::Scene;
+
+/// Edge length of the square tiles that are the work units of a render (and its merge order).
+pub const TILE_SIZE: usize = 16;
+
+/// A [`Budget::SamplesPerPixel`] render of `n` samples takes passes of at most
+/// `ceil(n / PASSES)` samples per pixel.
+const PASSES: u32 = 16;
+
+/// What [`render_pt`] needs besides the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PtSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Maximum path depth (bounces).
+    pub max_depth: u32,
+    /// Samples per pixel, or a wall-clock budget.
+    pub budget: Budget,
+    /// Master seed of every random number.
+    pub seed: u64,
+}
+
+/// The result of [`render_pt`].
+#[derive(Clone, Debug)]
+pub struct PtOutput {
+    /// The image: every pixel is the mean of its own samples (0 where none was taken).
+    pub image: Image,
+    /// Pixel samples taken.
+    pub samples: u64,
+    /// Samples whose radiance was NaN or infinite; they were dropped, not averaged.
+    pub dropped_nonfinite: u64,
+    /// True if `cancel` stopped the render early.
+    pub cancelled: bool,
+}
+
+/// Renders `scene` with unidirectional path tracing at `settings.width x settings.height`,
+/// on the current rayon pool.
+///
+/// The film is split into [`TILE_SIZE`] tiles (the work units), rendered in passes and merged
+/// in tile order, with a box filter of one pixel. Every random number is keyed by (seed,
+/// pixel, sample index, dimension) and a tile takes its samples in sample-index order, so
+/// under [`Budget::SamplesPerPixel`] the image is bit-identical for any thread count.
+///
+/// * `SamplesPerPixel(n)`: passes that double from one sample per pixel up to `ceil(n / 16)`
+///   (fewer in the last): every pixel soon has samples, and a pass never adds more than the
+///   pixels already had, so tiles a cancelled pass did not reach have at least half the
+///   samples of the others.
+/// * `Time(d)`: passes of one sample per pixel until `d` has elapsed; after the first pass,
+///   tiles not started before the deadline are skipped.
+/// * `cancel` is checked before every sample index of every tile (one sample of each of the
+///   tile's pixels, milliseconds of work), so a cancelled render returns promptly at any
+///   sample count, with every pixel normalised by its own samples: the partial image is an
+///   unbiased average of the samples taken, not darkened by the samples planned.
+///
+/// Progress is reported in pixel samples.
+pub fn render_pt(
+    scene: &Scene,
+    settings: &PtSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> PtOutput {
+    let start = Instant::now();
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let camera = scene.camera_spec().build(settings.width, settings.height);
+    let mut film = Film::new(w, h, Filter::BOX);
+    let work = tiles(w, h, TILE_SIZE);
+    let pixels = (w * h) as u64;
+
+    // Samples `first..first + count` of every pixel of `rect`, sample index by sample index;
+    // stops (returning false with the samples taken so far) when `cancel` is set.
+    let render_tile = |rect: PixelRect, first: u32, count: u32| -> (FilmTile, bool) {
+        let mut tile = FilmTile::new(w, h, Filter::BOX, rect);
+        let mut sampler = IndependentSampler::new(settings.seed);
+        for s in first..first + count {
+            if cancel.load(Ordering::Relaxed) {
+                return (tile, false);
+            }
+            for y in rect.y0..rect.y1 {
+                for x in rect.x0..rect.x1 {
+                    sampler.start_pixel_sample((y * w + x) as u64, u64::from(s));
+                    let (p, l) = pt::sample_pixel(
+                        scene,
+                        &camera,
+                        UVec2::new(x as u32, y as u32),
+                        &mut sampler,
+                        settings.max_depth,
+                    );
+                    tile.add_sample(p, l);
+                }
+            }
+            progress.advance(rect.area() as u64);
+        }
+        (tile, true)
+    };
+
+    let mut cancelled = false;
+    match settings.budget {
+        Budget::SamplesPerPixel(spp) => {
+            progress.set_total(pixels * u64::from(spp));
+            for (first, count) in passes(spp) {
+                let done: Vec<(FilmTile, bool)> = work
+                    .par_iter()
+                    .map(|&rect| render_tile(rect, first, count))
+                    .collect();
+                for (tile, complete) in &done {
+                    film.merge_tile(tile);
+                    cancelled |= !complete;
+                }
+                if cancelled {
+                    break;
+                }
+            }
+        }
+        Budget::Time(limit) => {
+            let deadline = start + limit;
+            let mut pass = 0u32;
+            loop {
+                let done: Vec<Option<(FilmTile, bool)>> = work
+                    .par_iter()
+                    .map(|&rect| {
+                        let late = pass > 0 && Instant::now() >= deadline;
+                        (!late).then(|| render_tile(rect, pass, 1))
+                    })
+                    .collect();
+                for (tile, complete) in done.iter().flatten() {
+                    film.merge_tile(tile);
+                    cancelled |= !complete;
+                }
+                pass += 1;
+                cancelled |= cancel.load(Ordering::Relaxed);
+                let elapsed = start.elapsed();
+                if cancelled || elapsed >= limit {
+                    break;
+                }
+                // Estimated total work so a progress bar can show an ETA.
+                let passes = (limit.as_secs_f64() / elapsed.as_secs_f64() * f64::from(pass))
+                    .ceil()
+                    .max(f64::from(pass + 1));
+                progress.set_total(pixels * passes as u64);
+            }
+        }
+    }
+    PtOutput {
+        image: film.image(0.0),
+        samples: film.samples,
+        dropped_nonfinite: film.nonfinite,
+        cancelled,
+    }
+}
+
+/// The passes `(first sample index, samples per pixel)` of a render of `spp` samples per
+/// pixel: sizes double from 1 up to `ceil(spp / PASSES)`, so a pass never adds more samples
+/// than the pixels already have (after the first).
+fn passes(spp: u32) -> impl Iterator<Item = (u32, u32)> {
+    let max_pass = spp.div_ceil(PASSES).max(1);
+    let mut first = 0u32;
+    std::iter::from_fn(move || {
+        if first >= spp {
+            return None;
+        }
+        let count = max_pass.min(first.max(1)).min(spp - first);
+        let pass = (first, count);
+        first += count;
+        Some(pass)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicU64;
+
+    /// Sets `flag` after `after` progress reports.
+    struct CancelAfter<'a> {
+        flag: &'a AtomicBool,
+        after: u64,
+        seen: AtomicU64,
+    }
+
+    impl Progress for CancelAfter<'_> {
+        fn set_total(&self, _: u64) {}
+        fn advance(&self, _: u64) {
+            if self.seen.fetch_add(1, Ordering::Relaxed) + 1 >= self.after {
+                self.flag.store(true, Ordering::Relaxed);
+            }
+        }
+    }
+
+    fn settings(spp: u32) -> PtSettings {
+        PtSettings {
+            width: 32,
+            height: 16,
+            max_depth: 3,
+            budget: Budget::SamplesPerPixel(spp),
+            seed: 1,
+        }
+    }
+
+    #[test]
+    fn cancel_stops_between_two_samples_of_a_tile() {
+        let scene = Scene::cornell_box(32, 16);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let flag = AtomicBool::new(false);
+        // One report per sample index of a 16 x 16 tile: the flag is set after the 5th.
+        let progress = CancelAfter {
+            flag: &flag,
+            after: 5,
+            seen: AtomicU64::new(0),
+        };
+        let out = pool.install(|| render_pt(&scene, &settings(1_000_000), &progress, &flag));
+        assert!(out.cancelled);
+        assert_eq!(out.samples, 5 * 256);
+        assert_eq!(out.image.count_nonfinite(), 0);
+    }
+
+    #[test]
+    fn passes_double_up_to_a_sixteenth_of_the_budget() {
+        let sizes: Vec<u32> = passes(100).map(|(_, count)| count).collect();
+        assert_eq!(sizes[..5], [1, 1, 2, 4, 7]);
+        assert!(sizes[4..sizes.len() - 1].iter().all(|&c| c == 7));
+        assert_eq!(sizes.iter().sum::<u32>(), 100);
+        let mut next = 0;
+        for (first, count) in passes(1_000_000) {
+            assert_eq!(first, next);
+            assert!(count <= first.max(1) && count <= 62_500);
+            next += count;
+        }
+        assert_eq!(next, 1_000_000);
+        assert_eq!(passes(16).count(), 16);
+        assert_eq!(passes(1).collect::<Vec<_>>(), [(0, 1)]);
+    }
+}
