@@ -266,6 +266,66 @@ fn ctrl_c_writes_the_partial_image() {
     assert!(dir.join("partial.png").is_file());
 }
 
+/// Ctrl-C under a huge `--spp` stops every integrator of the table within a second or two
+/// (writing the files included), with a partial image as bright as a finished render: every
+/// pixel is averaged over the samples taken, not divided by the million planned.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_under_spp_is_prompt_for_every_integrator() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+
+    let dir = temp_dir("ctrl-c-spp");
+    let size = ["--width", "32", "--height", "32"];
+    let mcmc = ["--bootstrap-samples", "4000", "--chains", "64"];
+    let reference = dir.join("reference.exr");
+    let output = chainlight(
+        &[
+            &["render", "--integrator", "bdpt", "--spp", "64"][..],
+            &size,
+            &["-o", path_str(&reference)],
+        ]
+        .concat(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let reference = read_exr(&reference).unwrap().mean_luminance();
+    for info in INTEGRATORS {
+        let out = dir.join(format!("{}.exr", info.name));
+        let mut child = Command::new(env!("CARGO_BIN_EXE_chainlight"))
+            .args(["render", "--integrator", info.name, "--spp", "1000000"])
+            .args(size)
+            .args(["--threads", "2", "-o", path_str(&out)])
+            .args(if info.is_mcmc { &mcmc[..] } else { &[] })
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut stderr_lines = BufReader::new(child.stderr.take().unwrap()).lines();
+        let first = stderr_lines.next().unwrap().unwrap();
+        assert!(first.starts_with("rendering"), "{first}");
+        std::thread::sleep(Duration::from_secs(1));
+        let status = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let interrupted = Instant::now();
+        let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
+        let output = child.wait_with_output().unwrap();
+        let took = interrupted.elapsed();
+        assert!(output.status.success(), "{}: {rest:?}", info.name);
+        assert!(took < Duration::from_secs(2), "{}: {took:?}", info.name);
+        assert!(stdout(&output).contains("cancelled"), "{}", stdout(&output));
+        let mean = read_exr(&out).unwrap().mean_luminance();
+        assert!(
+            (mean - reference).abs() < 0.25 * reference,
+            "{}: partial image mean {mean} vs {reference}",
+            info.name
+        );
+    }
+}
+
 /// The same seed gives a bit-identical EXR with 1 and 2 threads; another seed differs.
 #[test]
 fn same_seed_same_exr_for_any_thread_count() {
@@ -475,7 +535,10 @@ fn mcmc_time_budget_includes_a_huge_bootstrap() {
         assert!(output.status.success(), "{}", stderr(&output));
         let text = format!("{}{}", stdout(&output), stderr(&output));
         assert!(text.contains("bootstrap stopped"), "{text}");
-        assert!(elapsed < std::time::Duration::from_secs(8), "{integrator}: {elapsed:?}");
+        assert!(
+            elapsed < std::time::Duration::from_secs(8),
+            "{integrator}: {elapsed:?}"
+        );
         let image = read_exr(&out).unwrap();
         assert!(image.mean_luminance() > 0.0, "{integrator}: black image");
     }
