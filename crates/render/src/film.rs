@@ -5,14 +5,17 @@
 //!   splatted to every pixel within the filter radius with weight `f(pixel centre - p)`, and
 //!   the final pixel is `Σ w L / Σ w` (pbrt-v3's weighted reconstruction). A tile buffer covers
 //!   its pixels plus a margin of the filter radius.
-//! * **Splats** anywhere on the image (light tracing, MCMC) go to a [`SplatLayer`], also
-//!   filtered, and are added to the image as `scale · Σ f L / ∫f` (pbrt-v4's `AddSplat`).
+//! * **Splats** anywhere on the image (light tracing, MCMC) go to an
+//!   `mcmc_core::render_loop::SplatGrid` (box filter: the pixel a splat lands in; one
+//!   accumulation path for every splatting integrator and for outside renderers) and are added
+//!   to the image as `scale · Σ L`.
 //! * Work units (tiles, or a fixed number of jobs for splat layers) are merged with
 //!   [`Film::merge_tile`] / [`Film::merge_splats`] in a fixed order by the caller. All sums
 //!   are f64.
 //! * Non-finite samples are counted and dropped, never splatted.
 
 use glam::{Vec2, Vec3};
+use mcmc_core::render_loop::{SplatGrid, SplatSink};
 
 use crate::image::Image;
 
@@ -220,48 +223,6 @@ impl FilmTile {
     }
 }
 
-/// A full-image splat buffer (one per work unit), for contributions that land anywhere.
-#[derive(Clone, Debug)]
-pub struct SplatLayer {
-    width: usize,
-    height: usize,
-    filter: Filter,
-    data: Vec<[f64; 3]>,
-    /// Splats added (finite or not).
-    pub splats: u64,
-    /// Non-finite splats dropped.
-    pub nonfinite: u64,
-}
-
-impl SplatLayer {
-    /// Splats `l` at raster position `p` with the film's filter. Off-image positions add
-    /// nothing; non-finite `l` is counted and dropped (returns false).
-    #[inline]
-    pub fn add_splat(&mut self, p: Vec2, l: Vec3) -> bool {
-        self.splats += 1;
-        if !(l.is_finite() && p.is_finite()) {
-            self.nonfinite += 1;
-            return false;
-        }
-        let (xlo, xhi) = self.filter.pixel_range(p.x);
-        let (ylo, yhi) = self.filter.pixel_range(p.y);
-        for y in ylo.max(0)..=yhi.min(self.height as i64 - 1) {
-            for x in xlo.max(0)..=xhi.min(self.width as i64 - 1) {
-                let d = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - p;
-                let w = f64::from(self.filter.evaluate(d));
-                if w == 0.0 {
-                    continue;
-                }
-                let s = &mut self.data[y as usize * self.width + x as usize];
-                s[0] += w * f64::from(l.x);
-                s[1] += w * f64::from(l.y);
-                s[2] += w * f64::from(l.z);
-            }
-        }
-        true
-    }
-}
-
 /// The image being rendered: weighted pixel-sample sums plus splat sums.
 #[derive(Clone, Debug)]
 pub struct Film {
@@ -270,7 +231,7 @@ pub struct Film {
     filter: Filter,
     sum: Vec<[f64; 3]>,
     weight: Vec<f64>,
-    splat: Vec<[f64; 3]>,
+    splat: SplatGrid,
     /// Pixel samples merged.
     pub samples: u64,
     /// Splats merged.
@@ -290,7 +251,7 @@ impl Film {
             filter,
             sum: vec![[0.0; 3]; n],
             weight: vec![0.0; n],
-            splat: Vec::new(),
+            splat: SplatGrid::new(width, height),
             samples: 0,
             splats: 0,
             nonfinite: 0,
@@ -339,46 +300,29 @@ impl Film {
         self.nonfinite += tile.nonfinite;
     }
 
-    /// An empty full-image splat layer.
+    /// An empty full-image splat grid for one work unit (light tracing, MCMC); merge it with
+    /// [`Film::merge_splats`].
     #[must_use]
-    pub fn splat_layer(&self) -> SplatLayer {
-        SplatLayer {
-            width: self.width,
-            height: self.height,
-            filter: self.filter,
-            data: vec![[0.0; 3]; self.width * self.height],
-            splats: 0,
-            nonfinite: 0,
-        }
+    pub fn splat_grid(&self) -> SplatGrid {
+        SplatGrid::new(self.width, self.height)
     }
 
-    /// Adds a splat layer's sums.
-    pub fn merge_splats(&mut self, layer: &SplatLayer) {
-        if self.splat.is_empty() {
-            self.splat = vec![[0.0; 3]; self.width * self.height];
-        }
-        for (a, b) in self.splat.iter_mut().zip(&layer.data) {
-            for c in 0..3 {
-                a[c] += b[c];
-            }
-        }
-        self.splats += layer.splats;
-        self.nonfinite += layer.nonfinite;
+    /// Adds a work unit's splat sums (`splats` counts the grids' contributions merged).
+    pub fn merge_splats(&mut self, grid: &SplatGrid) {
+        self.splat.merge(grid);
+        self.splats += 1;
     }
 
     /// The image: `Σ w L / Σ w` per pixel (0 where no sample landed) plus
-    /// `splat_scale · Σ f L / ∫f` of the splats.
+    /// `splat_scale · Σ L` of the splats.
     #[must_use]
     pub fn image(&self, splat_scale: f64) -> Image {
         let mut img = Image::new(self.width, self.height);
-        let inv_integral = 1.0 / f64::from(self.filter.integral());
         for (i, px) in img.pixels.iter_mut().enumerate() {
             let w = self.weight[i];
             for c in 0..3 {
                 let mut v = if w > 0.0 { self.sum[i][c] / w } else { 0.0 };
-                if let Some(s) = self.splat.get(i) {
-                    v += s[c] * splat_scale * inv_integral;
-                }
+                v += self.splat.pixels()[i][c] * splat_scale;
                 px[c] = v as f32;
             }
         }
@@ -452,27 +396,22 @@ mod tests {
     }
 
     #[test]
-    fn splats_are_normalised_by_filter_integral() {
-        for filter in [Filter::BOX, Filter::TENT] {
-            let mut film = Film::new(8, 8, filter);
-            let mut layer = film.splat_layer();
-            // Many splats spread uniformly over the inner image: the image mean equals the
-            // splatted energy per pixel.
-            let n = 64 * 64;
-            for i in 0..n {
-                let p = Vec2::new(
-                    2.0 + 4.0 * ((i % 64) as f32 + 0.5) / 64.0,
-                    2.0 + 4.0 * ((i / 64) as f32 + 0.5) / 64.0,
-                );
-                layer.add_splat(p, Vec3::ONE);
-            }
-            assert!(!layer.add_splat(Vec2::ZERO, Vec3::splat(f32::NAN)));
-            layer.add_splat(Vec2::new(-50.0, 3.0), Vec3::ONE); // off-image: ignored
-            film.merge_splats(&layer);
-            let img = film.image(1.0 / n as f64);
-            let total: f64 = img.pixels.iter().map(|p| f64::from(p[0])).sum();
-            assert!((total - 1.0).abs() < 1e-3, "{filter:?}: {total}");
-            assert_eq!(film.nonfinite, 1);
+    fn splats_add_to_the_filtered_samples() {
+        let mut film = Film::new(4, 4, Filter::TENT);
+        let mut grid = film.splat_grid();
+        let n = 16 * 16;
+        for i in 0..n {
+            let p = [
+                4.0 * ((i % 16) as f32 + 0.5) / 16.0,
+                4.0 * ((i / 16) as f32 + 0.5) / 16.0,
+            ];
+            assert!(grid.add_rgb(p, [1.0; 3], 1.0));
         }
+        assert!(!grid.add_rgb([0.0, 0.0], [f32::NAN; 3], 1.0));
+        assert!(!grid.add_rgb([-50.0, 3.0], [1.0; 3], 1.0)); // off-image: ignored
+        film.merge_splats(&grid);
+        // 256 splats on 16 pixels, scale 1/16: every pixel is 1.
+        let img = film.image(1.0 / 16.0);
+        assert!(img.pixels.iter().all(|p| (p[0] - 1.0).abs() < 1e-6));
     }
 }

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::{Vec2, Vec3};
-use mcmc_core::render_loop::{SplatGrid, SplatSink};
+use mcmc_core::render_loop::SplatGrid;
 use mcmc_core::Progress;
 use rayon::prelude::*;
 
@@ -313,22 +313,15 @@ fn merge_layers<'a>(
     bands: impl Iterator<Item = (Option<&'a FilmTile>, Option<&'a SplatGrid>)>,
 ) -> Image {
     let mut film = Film::new(w, h, Filter::BOX);
-    let mut light = SplatGrid::new(w, h);
     for (camera, splats) in bands {
         if let Some(tile) = camera {
             film.merge_tile(tile);
         }
         if let Some(grid) = splats {
-            light.merge(grid);
+            film.merge_splats(grid);
         }
     }
-    let mut image = film.image(0.0);
-    for (px, l) in image.pixels.iter_mut().zip(light.pixels()) {
-        for c in 0..3 {
-            px[c] = (f64::from(px[c]) + l[c] * light_scale) as f32;
-        }
-    }
-    image
+    film.image(light_scale)
 }
 
 #[cfg(test)]

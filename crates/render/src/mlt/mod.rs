@@ -3,8 +3,6 @@
 
 mod path_sampler;
 mod run;
-mod splat;
 
 pub use path_sampler::{MmltTarget, PathPayload, PssmltTarget, PATH_STREAMS};
 pub use run::{render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings};
-pub use splat::SplatBuffer;

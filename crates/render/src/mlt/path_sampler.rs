@@ -7,8 +7,8 @@ use pss::PssState;
 
 use mcmc_core::render_loop::{Splat, SplatPayload};
 
-use crate::image::luminance;
 use crate::bdpt::{self, BdptParams, BdptScratch};
+use crate::image::luminance;
 use crate::sampler::{Sampler, Stream};
 use crate::scene::Scene;
 

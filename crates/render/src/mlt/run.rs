@@ -14,6 +14,7 @@ use mcmc_core::stats::AcceptanceStats;
 use mcmc_core::{Kernel, NoAdaptation, Progress, Target};
 use pss::{FreshPss, PssState};
 
+use crate::film::{Film, Filter};
 use crate::image::Image;
 
 /// How the large-step probability is chosen.
@@ -210,14 +211,13 @@ fn finish<Sh>(
     let large_step = estimate(&out.shared);
     let scale = out.splat_scale * (w * h) as f64;
     let mut notes = out.notes;
-    let message = if out.found_nothing {
-        notes.pop()
-    } else {
-        None
-    };
+    let message = if out.found_nothing { notes.pop() } else { None };
     MltOutput {
-        image: Image::from_pixels(w, h, out.sink.to_rgb32(scale))
-            .unwrap_or_else(|| Image::new(w, h)),
+        image: {
+            let mut film = Film::new(w, h, Filter::BOX);
+            film.merge_splats(&out.sink);
+            film.image(scale)
+        },
         b: out.b,
         b_standard_error: out.b_standard_error,
         bootstrap_samples: out.bootstrap_samples,
@@ -232,4 +232,3 @@ fn finish<Sh>(
         notes,
     }
 }
-
