@@ -11,7 +11,7 @@ use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
-use crate::scene::mesh::Mesh;
+use crate::mesh::Mesh;
 
 /// The closest intersection of a ray with the mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -17,6 +17,7 @@ pub mod image_io;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod mesh;
 pub mod metrics;
 pub mod mlt;
 pub mod sampler;

@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3, Vec3A};
 
 use crate::frame::Frame;
 use crate::image::luminance;
-use crate::scene::mesh::Mesh;
+use crate::mesh::Mesh;
 use crate::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_triangle};
 
 /// One emissive triangle: a Lambertian emitter of constant radiance.

@@ -12,7 +12,8 @@
 
 mod builtin;
 mod gltf_load;
-pub mod mesh;
+/// Triangle meshes: a leaf module (the BVH and the lights use it), re-exported here.
+pub use crate::mesh;
 pub mod texture;
 
 use std::path::Path;
