@@ -9,7 +9,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use render::scene::Scene;
-use render::session::{render, Budget, IntegratorKind, NoProgress, RenderOutput, RenderSettings};
+use render::session::{
+    render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderOutput, RenderSettings,
+};
 
 /// Image side: 4 PT tiles, 8 BDPT bands of 4 rows.
 const SIZE: u32 = 32;
@@ -35,6 +37,12 @@ fn settings(integrator: IntegratorKind, spp: u32, seed: u64) -> RenderSettings {
         threads: 2,
         seed,
         max_depth: 5,
+        mcmc: McmcSettings {
+            // Small enough that the bootstrap ends well within the 200 ms before the cancel.
+            bootstrap_samples: 10_000,
+            chains: 64,
+            ..McmcSettings::default()
+        },
         ..RenderSettings::default()
     }
 }
@@ -113,4 +121,18 @@ fn pt_cancels_promptly_with_a_correct_partial_image() {
 #[test]
 fn bdpt_cancels_promptly_with_a_correct_partial_image() {
     check(IntegratorKind::Bdpt);
+}
+
+/// PSSMLT and MMLT: the render loop polls the cancel flag every 64 mutations and normalises by
+/// the mutations made. The bound on the cancelled render's standard error assumes it scales
+/// like `1 / sqrt(mutations)` as for the references (the same chains, started the same way,
+/// only longer), with the same factor-of-two allowance.
+#[test]
+fn pssmlt_cancels_promptly_with_a_correct_partial_image() {
+    check(IntegratorKind::Pssmlt);
+}
+
+#[test]
+fn mmlt_cancels_promptly_with_a_correct_partial_image() {
+    check(IntegratorKind::Mmlt);
 }
