@@ -60,8 +60,8 @@ pub use kernel::{
     MAX_STAGES,
 };
 pub use mh::Mh;
-pub use progress::{NoProgress, Progress};
 pub use partition::Partition;
+pub use progress::{NoProgress, Progress};
 pub use proposal::{GaussianRandomWalk, Mixture, Proposal, Proposed};
 pub use target::{
     finite_difference_gradient, DifferentiableTarget, FiniteDifference, Point, Sample, SampleOf,

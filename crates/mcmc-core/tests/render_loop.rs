@@ -139,7 +139,11 @@ fn time_budget_includes_the_bootstrap() {
     assert!(elapsed < Duration::from_millis(2500), "{elapsed:?}");
     assert!(out.notes.iter().any(|n| n.contains("bootstrap stopped")));
     assert!(out.mutations > 0 && !out.cancelled);
-    assert!((out.b - 1.5).abs() < 10.0 * out.b_standard_error + 1e-3, "b {}", out.b);
+    assert!(
+        (out.b - 1.5).abs() < 10.0 * out.b_standard_error + 1e-3,
+        "b {}",
+        out.b
+    );
 }
 
 #[test]
@@ -177,7 +181,10 @@ fn same_seed_same_sink_for_any_thread_count() {
     assert_eq!(a.b.to_bits(), b.b.to_bits());
     let other = run(
         &[Ramp],
-        &LoopSettings { seed: 1, ..settings },
+        &LoopSettings {
+            seed: 1,
+            ..settings
+        },
         &AtomicBool::new(false),
     );
     assert_ne!(a.sink, other.sink);
@@ -202,7 +209,11 @@ fn a_cancelled_run_is_a_correct_partial_estimate() {
     });
     assert!(out.cancelled && out.mutations > 0);
     let mean: f64 = out.sink.pixels().iter().map(|p| p[0]).sum::<f64>() * out.splat_scale;
-    assert!((mean - 1.5).abs() < 0.05, "mean {mean} after {} mutations", out.mutations);
+    assert!(
+        (mean - 1.5).abs() < 0.05,
+        "mean {mean} after {} mutations",
+        out.mutations
+    );
 }
 
 #[test]

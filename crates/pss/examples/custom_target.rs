@@ -68,13 +68,13 @@ pub(crate) fn render(mutations: u64, seed: u64) -> Vec<[f32; 3]> {
     .run(&settings, &NoProgress, &AtomicBool::new(false))
     .expect("valid settings");
     // The loop's estimate is per unit of primary sample space; a pixel is 1/(W H) of it.
-    out.sink
-        .to_rgb32(out.splat_scale * (WIDTH * HEIGHT) as f64)
+    out.sink.to_rgb32(out.splat_scale * (WIDTH * HEIGHT) as f64)
 }
 
 /// The exact image: `W H` times the integral of `g` over each pixel (closed form).
 pub(crate) fn exact_image() -> Vec<[f32; 3]> {
-    let a = |u: f64| u + 0.9 * (6.0 * std::f64::consts::PI * u).sin() / (6.0 * std::f64::consts::PI);
+    let a =
+        |u: f64| u + 0.9 * (6.0 * std::f64::consts::PI * u).sin() / (6.0 * std::f64::consts::PI);
     let b = |u: f64| 0.2 * u + u * u * u / 3.0;
     let (w, h) = (WIDTH as f64, HEIGHT as f64);
     (0..HEIGHT)
@@ -95,11 +95,17 @@ pub(crate) fn main() -> std::io::Result<()> {
         .map(|(p, e)| (f64::from(p[0]) - f64::from(e[0])).powi(2) / f64::from(e[0]).powi(2))
         .sum::<f64>()
         / image.len() as f64;
-    println!("{WIDTH}x{HEIGHT} image, 2 000 000 mutations: relMSE against the exact image {relmse:.2e}");
+    println!(
+        "{WIDTH}x{HEIGHT} image, 2 000 000 mutations: relMSE against the exact image {relmse:.2e}"
+    );
     // A binary PPM, brightest pixel at 255.
     let max = image.iter().map(|p| p[0]).fold(0.0f32, f32::max).max(1e-12);
     let mut ppm = format!("P6\n{WIDTH} {HEIGHT}\n255\n").into_bytes();
-    ppm.extend(image.iter().flat_map(|p| p.map(|c| (c / max * 255.0).round() as u8)));
+    ppm.extend(
+        image
+            .iter()
+            .flat_map(|p| p.map(|c| (c / max * 255.0).round() as u8)),
+    );
     std::fs::write("custom_target.ppm", ppm)?;
     println!("wrote custom_target.ppm");
     Ok(())
@@ -142,6 +148,9 @@ mod tests {
                 [(f64::from(e[0]) * (1.0 + 0.8 * stripe) / (1.0 + 0.9 * stripe)) as f32; 3]
             })
             .collect();
-        assert!(worst_t(&reps, &wrong) > 6.0, "negative control not detected");
+        assert!(
+            worst_t(&reps, &wrong) > 6.0,
+            "negative control not detected"
+        );
     }
 }

@@ -9,11 +9,11 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec2;
+use mcmc_core::render_loop::{SplatGrid, SplatObserver};
 use mcmc_core::{Chain, Mh, NoAdaptation, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::SeedableRng;
 use render::bdpt::{self, BdptParams, BdptScratch};
-use mcmc_core::render_loop::{SplatGrid, SplatObserver};
 use render::mlt::{MmltTarget, PssmltTarget, PATH_STREAMS};
 use render::sampler::{IndependentSampler, Sampler};
 use render::scene::Scene;

@@ -46,8 +46,8 @@ use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
 use render::metrics::{relmse, RELMSE_EPSILON};
 use render::mlt::{
-    render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget,
-    PssmltTarget, PATH_STREAMS,
+    render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget, PssmltTarget,
+    PATH_STREAMS,
 };
 use render::scene::{CameraSpec, Material, Mesh, Scene};
 use render::session::NoProgress;

@@ -3,9 +3,9 @@
 
 use std::sync::atomic::AtomicBool;
 
+use mcmc_core::render_loop::{Splat, SplatPayload};
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
-use mcmc_core::render_loop::{Splat, SplatPayload};
 use render::mlt::{render_mlt, LargeStepMode, MltBudget, MltSettings};
 use render::session::NoProgress;
 

@@ -198,12 +198,12 @@ where
         }
         let len = batch.min(total - evaluated) as usize;
         let first = evaluated;
-        weights[..len]
-            .par_iter_mut()
-            .enumerate()
-            .for_each_init(init, |(state, payload), (k, w)| {
+        weights[..len].par_iter_mut().enumerate().for_each_init(
+            init,
+            |(state, payload), (k, w)| {
                 *w = weight_of(targets, source, plan.seed, first + k as u64, state, payload);
-            });
+            },
+        );
         for row in weights[..len].chunks(d as usize) {
             let mut r = 0.0;
             for &w in row {

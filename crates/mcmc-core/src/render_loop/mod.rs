@@ -111,7 +111,13 @@ impl LoopSettings {
         let range = |name, v: f64, lo: f64, hi: f64, allowed| {
             McmcError::check_range(name, v, lo, hi, allowed)
         };
-        range("chains", self.chains as f64, 1.0, MAX_CHAINS as f64, "1..=1048576")?;
+        range(
+            "chains",
+            self.chains as f64,
+            1.0,
+            MAX_CHAINS as f64,
+            "1..=1048576",
+        )?;
         range(
             "bootstrap_samples",
             self.bootstrap_samples as f64,
@@ -312,9 +318,7 @@ where
             }
         }
         let targets_count = self.targets.len() as u64;
-        let bootstrap_total = settings
-            .bootstrap_samples
-            .saturating_mul(targets_count);
+        let bootstrap_total = settings.bootstrap_samples.saturating_mul(targets_count);
         progress.set_total(match settings.budget {
             LoopBudget::Mutations(n) => bootstrap_total.saturating_add(n),
             LoopBudget::Time(_) => bootstrap_total,
@@ -391,10 +395,8 @@ where
                     let (target, index) = boot.starts[c];
                     let slot = ChainSlot { chain: c, target };
                     let mut state = self.states.empty();
-                    self.states.independent(
-                        bootstrap_key(settings.seed, target, index),
-                        &mut state,
-                    );
+                    self.states
+                        .independent(bootstrap_key(settings.seed, target, index), &mut state);
                     let rng = ChainRng::seed_from_u64(chain_seed(settings.seed, c as u64));
                     match Chain::new(
                         &self.targets[target],
