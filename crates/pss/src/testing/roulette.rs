@@ -135,6 +135,15 @@ impl RoulettePath {
         (0..self.max_depth).map(|k| s * c.powi(k as i32)).sum()
     }
 
+    /// Number of coordinates an evaluation of `x` reads (the path length, or `max_depth` for
+    /// a path that does not stop), computed on a copy.
+    #[must_use]
+    pub fn reads(&self, x: &PssState) -> usize {
+        let mut x = x.clone();
+        self.read(&mut x)
+            .map_or(self.max_depth, |(length, ..)| length)
+    }
+
     /// Reads the path from `x` (rewinding it): `(length, u_0, u_{L-1}, log of the product of
     /// factors)`, or `None` if it did not stop within `max_depth` coordinates.
     fn read(&self, x: &mut PssState) -> Option<(usize, f64, f64, f64)> {

@@ -132,6 +132,18 @@ impl Stripes {
         in_band(u1, self.band_periods)
     }
 
+    /// Number of coordinates an evaluation of `x` reads (1 outside the stripes, 2 inside),
+    /// computed on a copy.
+    #[must_use]
+    pub fn reads(&self, x: &PssState) -> usize {
+        let mut x = x.clone();
+        if self.in_stripes(x.get(0)) {
+            2
+        } else {
+            1
+        }
+    }
+
     /// The unnormalised density inside the stripes at `u1`.
     fn inside(&self, u1: f64) -> f64 {
         if self.is_high(u1) {
