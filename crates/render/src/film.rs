@@ -318,13 +318,13 @@ impl Film {
     #[must_use]
     pub fn image(&self, splat_scale: f64) -> Image {
         let mut img = Image::new(self.width, self.height);
+        let splats = self.splat.pixels();
         for (i, px) in img.pixels.iter_mut().enumerate() {
             let w = self.weight[i];
-            for c in 0..3 {
-                let mut v = if w > 0.0 { self.sum[i][c] / w } else { 0.0 };
-                v += self.splat.pixels()[i][c] * splat_scale;
-                px[c] = v as f32;
-            }
+            *px = std::array::from_fn(|c| {
+                let mean = if w > 0.0 { self.sum[i][c] / w } else { 0.0 };
+                (mean + splats[i][c] * splat_scale) as f32
+            });
         }
         img
     }

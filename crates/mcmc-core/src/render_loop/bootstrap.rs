@@ -231,7 +231,7 @@ where
         stopped_early,
         cancelled,
     };
-    if cancelled || !(sum > 0.0) || plan.chains == 0 {
+    if cancelled || sum.is_nan() || sum <= 0.0 || plan.chains == 0 {
         return outcome;
     }
     let (chunk, chunk_sums) = sums.finish();
