@@ -31,33 +31,36 @@
 //! # Sizes
 //! [`STARTS`] = 10^5 chains of [`STEPS`] = 100 steps. The bias of re-drawn coordinates builds
 //! up over the run (each re-drawing proposal from a stale state adds some), and the large-step
-//! mixture dilutes it (30% of its proposals ignore the current state); with these sizes the
-//! pre-fix lazy state (which re-drew stale coordinates) fails every lazy test here with
-//! p < 1e-15 (recorded in docs/methods/pssmlt-mmlt.md), while each test takes a few seconds.
+//! mixture dilutes it (30% of its proposals ignore the current state). With these sizes the
+//! pre-fix lazy state (commit 5677c34, which re-drew stale coordinates at every proposal)
+//! failed every lazy test here: chi2 = 4598 (Kelemen), 6994 (Gaussian) and 129.4
+//! (PSSMLT, p = 5.6e-14) with 31 dof on `Stripes`; chi2 = 3882 (Kelemen), 2952 (Gaussian)
+//! and 672 (PSSMLT, p = 3.2e-79) with 116 dof on `RoulettePath`; the eager controls passed.
+//! Each test takes a few seconds.
 //!
 //! # Statistics
 //! If the kernel preserves pi, the final states of independent chains from independent exact
 //! starts are i.i.d. from pi, so Pearson's statistic (bins pooled to expected count >= 5) is
 //! asymptotically chi-square and the p-value uniform. This file runs [`CHI_SQUARE_TESTS`]
 //! tests that must pass (two exact-sampler checks, six lazy kernels, two eager kernels, the
-//! honest regional Gaussian), each at the Sidak level `1 - 0.99^(1/11) = 9.1e-4`, so the
-//! probability that any correct kernel fails is 0.01. Seeds are fixed: deterministic. The
+//! honest regional Gaussian, two splat-weight checks), each at the Sidak level
+//! `1 - 0.99^(1/13) = 7.7e-4`, so the probability that any correct kernel fails is 0.01. Seeds are fixed: deterministic. The
 //! negative control must reach p < [`OVERWHELMING`] = 1e-6.
 
 use mcmc_core::testing::{
-    sidak_alpha, ChiSquareReport, StationarityParams, TreatedAsSymmetric, ALPHA,
+    sidak_alpha, ChiSquareReport, SplatParams, StationarityParams, TreatedAsSymmetric, ALPHA,
 };
 use mcmc_core::{Chain, Kernel, Mh, NoAdaptation};
 use pss::testing::{
-    exact_sampler_test, pss_stationarity_test, Eager, ExactPssTarget, RegionalGaussian,
-    RoulettePath, Stripes,
+    exact_sampler_test, pss_splat_weight_test, pss_stationarity_test, Eager, ExactPssTarget,
+    RegionalGaussian, RoulettePath, Stripes,
 };
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 /// Chi-square tests in this file that must pass, for the Sidak correction. Keep in sync.
-const CHI_SQUARE_TESTS: usize = 11;
+const CHI_SQUARE_TESTS: usize = 13;
 
 /// Independent exact starts per stationarity test.
 const STARTS: usize = 100_000;
@@ -238,4 +241,19 @@ fn asymmetric_proposal_treated_as_symmetric_fails() {
     );
     assert!(report.p_value < OVERWHELMING, "{report}");
     assert!(report.rejects(sidak_alpha(ALPHA, CHI_SQUARE_TESTS)));
+}
+
+/// The observer contract on read-set targets: one lazy PSSMLT step from each exact start
+/// splats `1 - a` on the current state and `a` on the (lazily evaluated) candidate, and the
+/// splat-weighted histogram matches pi (Hotelling's statistic, `mcmc_core::testing`).
+#[test]
+fn lazy_pssmlt_splat_weights_keep_the_contract() {
+    let params = SplatParams::new(STARTS, 50);
+    let report = pss_splat_weight_test(&Stripes::default(), &Mh::new(pssmlt()), &params);
+    eprintln!("stripes / lazy PSSMLT splat weights: {report}");
+    report.assert_passes("stripes / lazy PSSMLT splat weights", CHI_SQUARE_TESTS);
+    let params = SplatParams::new(STARTS, 51);
+    let report = pss_splat_weight_test(&RoulettePath::default(), &Mh::new(pssmlt()), &params);
+    eprintln!("roulette / lazy PSSMLT splat weights: {report}");
+    report.assert_passes("roulette / lazy PSSMLT splat weights", CHI_SQUARE_TESTS);
 }
