@@ -1,9 +1,40 @@
 //! chainlight's reference renderer: glTF scenes, an obvhs BVH, materials, cameras, lights,
-//! independent samplers and path tracing, a deterministic film, and EXR/PNG output.
+//! independent samplers, path tracing and BDPT, the MCMC integrators (PSSMLT, MMLT) over
+//! mcmc-core's render loop, a deterministic film, and EXR/PNG output.
 //!
-//! Every integrator draws its random numbers through [`sampler::Sampler`], so the same path
+//! Every integrator draws its random numbers through [`Sampler`], so the same path
 //! construction code runs under an independent sampler (PT, BDPT) and under primary-sample-space
-//! Markov chains (PSSMLT, MMLT, DRMLT, MALA).
+//! Markov chains (PSSMLT, MMLT, DRMLT, MALA). The integrators are listed once, in
+//! [`INTEGRATORS`]; the command line and its tests are built from that table.
+//!
+//! Layers (a module imports only from layers below it):
+//!
+//! | layer | modules |
+//! |---|---|
+//! | entry point | [`session`]: settings, validation, dispatch to a driver |
+//! | drivers | [`integrator::pt_driver`], [`bdpt::render_bdpt`], [`mlt`] |
+//! | integrators | [`integrator::pt`], [`bdpt`] (subpaths, connections, MIS) |
+//! | scene | [`scene`], [`camera`], [`light`], [`material`], [`bvh`], [`mesh`] |
+//! | foundations | [`sampler`], [`film`], [`image`], [`image_io`], [`metrics`], [`budget`], [`frame`], [`warp`], [`error`] |
+//!
+//! # Example
+//! ```
+//! use std::sync::atomic::AtomicBool;
+//!
+//! use render::{render, Budget, IntegratorKind, NoProgress, RenderSettings, Scene};
+//!
+//! let settings = RenderSettings {
+//!     width: 16,
+//!     height: 16,
+//!     integrator: IntegratorKind::Bdpt,
+//!     budget: Budget::SamplesPerPixel(2),
+//!     ..RenderSettings::default()
+//! };
+//! let scene = Scene::cornell_box(16, 16);
+//! let cancel = AtomicBool::new(false); // set it (e.g. from a Ctrl-C handler) to stop early
+//! let out = render(&scene, &settings, &NoProgress, &cancel).unwrap();
+//! assert!(!out.cancelled && out.image.mean_luminance() > 0.0);
+//! ```
 
 pub mod bdpt;
 pub mod budget;
@@ -24,3 +55,19 @@ pub mod sampler;
 pub mod scene;
 pub mod session;
 pub mod warp;
+
+pub use bdpt::{render_bdpt, BdptOutput, BdptParams};
+pub use budget::Budget;
+pub use camera::Camera;
+pub use error::RenderError;
+pub use film::{Film, FilmTile, Filter};
+pub use image::Image;
+pub use integrator::pt_driver::{render_pt, PtOutput, PtSettings};
+pub use integrator::{IntegratorInfo, IntegratorKind, INTEGRATORS};
+pub use material::{Bsdf, TransportMode};
+pub use mesh::Mesh;
+pub use sampler::{IndependentSampler, Sampler, Stream};
+pub use scene::{CameraSpec, Material, Scene};
+pub use session::{
+    render, render_cornell_box, McmcSettings, NoProgress, Progress, RenderOutput, RenderSettings,
+};
