@@ -221,43 +221,49 @@ fn tiny_render_writes_exr_and_png() {
     );
 }
 
-/// Ctrl-C (SIGINT) during a long render still writes the partial image and exits with 0.
+/// Runs `chainlight args`, sends it SIGINT (Ctrl-C) `wait` after it reports that the render
+/// started (the "rendering ..." line comes after the Ctrl-C handler is installed), and returns
+/// its output, its stderr lines after the first, and how long it took to exit after the signal.
 #[cfg(unix)]
-#[test]
-fn ctrl_c_writes_the_partial_image() {
+fn interrupt(
+    args: &[&str],
+    wait: std::time::Duration,
+) -> (Output, Vec<String>, std::time::Duration) {
     use std::io::{BufRead, BufReader};
     use std::process::Stdio;
 
-    let dir = temp_dir("ctrl-c");
-    let out = dir.join("partial.exr");
     let mut child = Command::new(env!("CARGO_BIN_EXE_chainlight"))
-        .args([
-            "render",
-            "--width",
-            "32",
-            "--height",
-            "32",
-            "--time",
-            "60",
-            "--threads",
-            "1",
-        ])
-        .args(["-o", path_str(&out)])
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // The "rendering ..." line is printed after the Ctrl-C handler is installed.
     let mut stderr_lines = BufReader::new(child.stderr.take().unwrap()).lines();
     let first = stderr_lines.next().unwrap().unwrap();
     assert!(first.starts_with("rendering"), "{first}");
+    std::thread::sleep(wait);
     let status = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
         .unwrap();
     assert!(status.success());
+    let interrupted = std::time::Instant::now();
     let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
     let output = child.wait_with_output().unwrap();
+    (output, rest, interrupted.elapsed())
+}
+
+/// Ctrl-C (SIGINT) during a long render still writes the partial image and exits with 0.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_the_partial_image() {
+    let dir = temp_dir("ctrl-c");
+    let out = dir.join("partial.exr");
+    let args = ["render", "--width", "32", "--height", "32", "--time", "60"];
+    let (output, rest, _) = interrupt(
+        &[&args[..], &["--threads", "1", "-o", path_str(&out)]].concat(),
+        std::time::Duration::ZERO,
+    );
     assert!(output.status.success(), "{rest:?}");
     assert!(rest.iter().any(|l| l.contains("partial image")), "{rest:?}");
     assert!(stdout(&output).contains("cancelled"), "{}", stdout(&output));
@@ -272,9 +278,7 @@ fn ctrl_c_writes_the_partial_image() {
 #[cfg(unix)]
 #[test]
 fn ctrl_c_under_spp_is_prompt_for_every_integrator() {
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
-    use std::time::{Duration, Instant};
+    use std::time::Duration;
 
     let dir = temp_dir("ctrl-c-spp");
     let size = ["--width", "32", "--height", "32"];
@@ -292,28 +296,14 @@ fn ctrl_c_under_spp_is_prompt_for_every_integrator() {
     let reference = read_exr(&reference).unwrap().mean_luminance();
     for info in INTEGRATORS {
         let out = dir.join(format!("{}.exr", info.name));
-        let mut child = Command::new(env!("CARGO_BIN_EXE_chainlight"))
-            .args(["render", "--integrator", info.name, "--spp", "1000000"])
-            .args(size)
-            .args(["--threads", "2", "-o", path_str(&out)])
-            .args(if info.is_mcmc { &mcmc[..] } else { &[] })
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut stderr_lines = BufReader::new(child.stderr.take().unwrap()).lines();
-        let first = stderr_lines.next().unwrap().unwrap();
-        assert!(first.starts_with("rendering"), "{first}");
-        std::thread::sleep(Duration::from_secs(1));
-        let status = Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(status.success());
-        let interrupted = Instant::now();
-        let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
-        let output = child.wait_with_output().unwrap();
-        let took = interrupted.elapsed();
+        let args = [
+            &["render", "--integrator", info.name, "--spp", "1000000"][..],
+            &size,
+            &["--threads", "2", "-o", path_str(&out)],
+            if info.is_mcmc { &mcmc[..] } else { &[] },
+        ]
+        .concat();
+        let (output, rest, took) = interrupt(&args, Duration::from_secs(1));
         assert!(output.status.success(), "{}: {rest:?}", info.name);
         assert!(took < Duration::from_secs(2), "{}: {took:?}", info.name);
         assert!(stdout(&output).contains("cancelled"), "{}", stdout(&output));

@@ -54,6 +54,8 @@ pub mod mlt;
 pub mod sampler;
 pub mod scene;
 pub mod session;
+#[cfg(test)]
+mod test_util;
 pub mod warp;
 
 pub use bdpt::{render_bdpt, BdptOutput, BdptParams};

@@ -237,6 +237,14 @@ fn emitter_notes(scene: &Scene) -> Vec<String> {
     }
 }
 
+/// BDPT's parameters (shared by BDPT and the MCMC path samplers) for `settings`.
+fn bdpt_params(settings: &RenderSettings) -> BdptParams {
+    BdptParams {
+        max_depth: settings.max_depth,
+        ..BdptParams::default()
+    }
+}
+
 /// PT through its driver.
 fn render_pt(
     scene: &Scene,
@@ -272,10 +280,7 @@ fn render_bdpt(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> RenderOutput {
-    let params = BdptParams {
-        max_depth: settings.max_depth,
-        ..BdptParams::default()
-    };
+    let params = bdpt_params(settings);
     let (spp, time) = match settings.budget {
         Budget::SamplesPerPixel(n) => (Some(n), None),
         Budget::Time(t) => (None, Some(t)),
@@ -309,10 +314,7 @@ fn render_bidirectional(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> RenderOutput {
-    let params = BdptParams {
-        max_depth: settings.max_depth,
-        ..BdptParams::default()
-    };
+    let params = bdpt_params(settings);
     let (w, h) = (settings.width, settings.height);
     let mut notes = emitter_notes(scene);
     let m = &settings.mcmc;
@@ -437,31 +439,13 @@ mod tests {
 
     #[test]
     fn cancel_mid_render_returns_the_partial_image() {
-        /// Cancels after `after` progress reports.
-        struct CancelAfter<'a> {
-            flag: &'a AtomicBool,
-            after: u64,
-            seen: std::sync::atomic::AtomicU64,
-        }
-        impl Progress for CancelAfter<'_> {
-            fn set_total(&self, _: u64) {}
-            fn advance(&self, _: u64) {
-                if self.seen.fetch_add(1, Ordering::Relaxed) + 1 >= self.after {
-                    self.flag.store(true, Ordering::Relaxed);
-                }
-            }
-        }
         let scene = Scene::cornell_box(48, 48);
         let mut s = settings();
         (s.width, s.height, s.threads) = (48, 48, 2);
         s.budget = Budget::SamplesPerPixel(64);
         let full = render(&scene, &s, &NoProgress, &AtomicBool::new(false)).unwrap();
         let flag = AtomicBool::new(false);
-        let progress = CancelAfter {
-            flag: &flag,
-            after: 12,
-            seen: Default::default(),
-        };
+        let progress = crate::test_util::CancelAfter::new(&flag, 12);
         let out = render(&scene, &s, &progress, &flag).unwrap();
         assert!(out.cancelled);
         assert!(

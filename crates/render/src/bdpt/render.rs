@@ -328,23 +328,7 @@ fn merge_layers<'a>(
 mod tests {
     use super::*;
     use crate::scene::Scene;
-    use std::sync::atomic::AtomicU64;
-
-    /// Sets `flag` after `after` progress reports (one per band row).
-    struct CancelAfter<'a> {
-        flag: &'a AtomicBool,
-        after: u64,
-        seen: AtomicU64,
-    }
-
-    impl Progress for CancelAfter<'_> {
-        fn set_total(&self, _: u64) {}
-        fn advance(&self, _: u64) {
-            if self.seen.fetch_add(1, Ordering::Relaxed) + 1 >= self.after {
-                self.flag.store(true, Ordering::Relaxed);
-            }
-        }
-    }
+    use crate::test_util::CancelAfter;
 
     #[test]
     fn cancel_stops_within_a_pass() {
@@ -354,12 +338,8 @@ mod tests {
             .build()
             .unwrap();
         let flag = AtomicBool::new(false);
-        // A pass is 16 rows: stop after the 4th row of the second pass.
-        let progress = CancelAfter {
-            flag: &flag,
-            after: 20,
-            seen: AtomicU64::new(0),
-        };
+        // One report per band row; a pass is 16 rows: stop after the 4th row of the second.
+        let progress = CancelAfter::new(&flag, 20);
         let params = BdptParams::default();
         let out = pool.install(|| {
             render_bdpt(
@@ -383,11 +363,7 @@ mod tests {
     fn strategy_images_sum_to_the_image_after_a_cut_pass() {
         let scene = Scene::cornell_box(16, 16);
         let flag = AtomicBool::new(false);
-        let progress = CancelAfter {
-            flag: &flag,
-            after: 40,
-            seen: AtomicU64::new(0),
-        };
+        let progress = CancelAfter::new(&flag, 40);
         let params = BdptParams {
             max_depth: 3,
             ..BdptParams::default()

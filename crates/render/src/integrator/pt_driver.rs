@@ -185,23 +185,7 @@ fn passes(spp: u32) -> impl Iterator<Item = (u32, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::atomic::AtomicU64;
-
-    /// Sets `flag` after `after` progress reports.
-    struct CancelAfter<'a> {
-        flag: &'a AtomicBool,
-        after: u64,
-        seen: AtomicU64,
-    }
-
-    impl Progress for CancelAfter<'_> {
-        fn set_total(&self, _: u64) {}
-        fn advance(&self, _: u64) {
-            if self.seen.fetch_add(1, Ordering::Relaxed) + 1 >= self.after {
-                self.flag.store(true, Ordering::Relaxed);
-            }
-        }
-    }
+    use crate::test_util::CancelAfter;
 
     fn settings(spp: u32) -> PtSettings {
         PtSettings {
@@ -222,11 +206,7 @@ mod tests {
             .unwrap();
         let flag = AtomicBool::new(false);
         // One report per sample index of a 16 x 16 tile: the flag is set after the 5th.
-        let progress = CancelAfter {
-            flag: &flag,
-            after: 5,
-            seen: AtomicU64::new(0),
-        };
+        let progress = CancelAfter::new(&flag, 5);
         let out = pool.install(|| render_pt(&scene, &settings(1_000_000), &progress, &flag));
         assert!(out.cancelled);
         assert_eq!(out.samples, 5 * 256);
