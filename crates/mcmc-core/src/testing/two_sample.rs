@@ -169,10 +169,14 @@ mod tests {
         let same = ks_two_sample(&a, &a);
         assert_eq!(same.statistic, 0.0);
         assert_eq!(same.p_value, 1.0);
-        let b: Vec<f64> = a.iter().map(|x| x + 0.1).collect();
+        let b: Vec<f64> = a.iter().map(|x| x + 0.2).collect();
         let shifted = ks_two_sample(&a, &b);
-        assert!((shifted.statistic - 0.1).abs() < 2e-3, "{shifted}");
-        assert!(shifted.p_value < 1e-6, "{shifted}");
+        assert!((shifted.statistic - 0.2).abs() < 2e-3, "{shifted}");
+        // lambda = (sqrt(500) + 0.12 + 0.11 / sqrt(500)) D = 4.50: Q ~ 2 exp(-2 lambda^2).
+        let lambda = (500f64.sqrt() + 0.12 + 0.11 / 500f64.sqrt()) * shifted.statistic;
+        let leading = 2.0 * (-2.0 * lambda * lambda).exp();
+        assert!((shifted.p_value / leading - 1.0).abs() < 1e-6, "{shifted}");
+        assert!(shifted.p_value < 1e-15, "{shifted}");
     }
 
     #[test]
