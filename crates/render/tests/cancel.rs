@@ -38,7 +38,7 @@ fn settings(integrator: IntegratorKind, spp: u32, seed: u64) -> RenderSettings {
         seed,
         max_depth: 5,
         mcmc: McmcSettings {
-            // Small enough that the bootstrap ends well within the 200 ms before the cancel.
+            // A short bootstrap (the test waits for its end before the 200 ms start).
             bootstrap_samples: 10_000,
             chains: 64,
             ..McmcSettings::default()
@@ -47,13 +47,44 @@ fn settings(integrator: IntegratorKind, spp: u32, seed: u64) -> RenderSettings {
     }
 }
 
-/// Starts a render of 10^6 samples per pixel, sets the cancel flag after [`RUN_FOR`] and
-/// returns its output and how long it took to return after the flag was set.
+/// Counts progress units, so the test can wait until the render has really started.
+#[derive(Default)]
+struct Count(std::sync::atomic::AtomicU64);
+
+impl render::session::Progress for Count {
+    fn set_total(&self, _total: u64) {}
+    fn advance(&self, done: u64) {
+        self.0.fetch_add(done, Ordering::Relaxed);
+    }
+}
+
+/// Starts a render of 10^6 samples (mutations) per pixel, waits until it has rendered (for
+/// MCMC: until the bootstrap is over and chains run, however loaded the machine is), sets the
+/// cancel flag [`RUN_FOR`] later and returns its output and how long it took to return after
+/// the flag was set.
 fn cancelled_render(scene: &Scene, integrator: IntegratorKind) -> (RenderOutput, Duration) {
     let settings = settings(integrator, 1_000_000, 7);
+    // Progress units before the first pixel sample or mutation: the bootstrap samples.
+    let targets = if integrator == IntegratorKind::Mmlt {
+        u64::from(settings.max_depth) + 1
+    } else {
+        1
+    };
+    let warm_up = if integrator.is_mcmc() {
+        settings.mcmc.bootstrap_samples as u64 * targets
+    } else {
+        0
+    };
     let cancel = AtomicBool::new(false);
+    let count = Count::default();
     std::thread::scope(|scope| {
-        let job = scope.spawn(|| render(scene, &settings, &NoProgress, &cancel).unwrap());
+        let job = scope.spawn(|| render(scene, &settings, &count, &cancel).unwrap());
+        let waiting = Instant::now();
+        while count.0.load(Ordering::Relaxed) <= warm_up
+            && waiting.elapsed() < Duration::from_secs(60)
+        {
+            std::thread::sleep(Duration::from_millis(5));
+        }
         std::thread::sleep(RUN_FOR);
         cancel.store(true, Ordering::Relaxed);
         let flagged = Instant::now();
