@@ -303,7 +303,7 @@ fn ctrl_c_under_spp_is_prompt_for_every_integrator() {
             if info.is_mcmc { &mcmc[..] } else { &[] },
         ]
         .concat();
-        let (output, rest, took) = interrupt(&args, Duration::from_secs(1));
+        let (output, rest, took) = interrupt(&args, Duration::from_secs(2));
         assert!(output.status.success(), "{}: {rest:?}", info.name);
         assert!(took < Duration::from_secs(2), "{}: {took:?}", info.name);
         assert!(stdout(&output).contains("cancelled"), "{}", stdout(&output));
