@@ -96,9 +96,6 @@ pub struct MltOutput {
     pub notes: Vec<String>,
 }
 
-/// Mutations per chain per round when no estimation phase sets the round length.
-const ROUND: u64 = 1000;
-
 /// Runs an MCMC render over one or more targets (PSSMLT: one; MMLT: one per path depth)
 /// through `mcmc_core::render_loop`: bootstrap of fresh PSS points (`pss::FreshPss`), chain
 /// starts resampled in proportion to `f`, chains in 32 fixed jobs, expected-value splats, the
@@ -131,7 +128,6 @@ where
         bootstrap_samples: settings.bootstrap_samples.max(1) as u64,
         budget,
         seed: settings.seed,
-        round_mutations: ROUND,
         ..LoopSettings::default()
     };
     let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
