@@ -10,6 +10,10 @@
 //! `KHR_materials_emissive_strength`, metallic-roughness factors; none has a camera, so every
 //! one is auto-framed.
 //!
+//! Each model must also cover part of the image (camera rays through the pixel centres hit
+//! it): a non-black image alone would pass for a model that the automatic framing misses or
+//! sees edge-on, lit only by the environment behind it.
+//!
 //! Run with `cargo test -p render --release --test khronos_models -- --nocapture` to see each
 //! model's load warnings and render notes.
 
@@ -17,6 +21,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
+use glam::Vec2;
 use render::scene::Scene;
 use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
 
@@ -30,6 +35,8 @@ const MLT_MPP: u32 = 8;
 /// (or the models' own emitters) gives means of order 0.1 to 1; an image with no light at all
 /// gives exactly 0.
 const BLACK: f64 = 1e-3;
+/// Smallest fraction of the pixel centres whose camera ray must hit the model.
+const MIN_COVERAGE: f64 = 0.02;
 
 /// Every bundled model: (directory under `scenes/third-party/`, scene file).
 const MODELS: [(&str, &str); 6] = [
@@ -70,11 +77,27 @@ fn settings(integrator: IntegratorKind) -> RenderSettings {
     }
 }
 
+/// Fraction of the `SIZE x SIZE` pixel centres whose camera ray hits the scene's geometry.
+fn coverage(scene: &Scene) -> f64 {
+    let camera = scene.camera();
+    let mut hits = 0u32;
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let ray = camera.generate_ray(p, Vec2::splat(0.5), 0.5);
+            if scene.intersect(&ray).is_some() {
+                hits += 1;
+            }
+        }
+    }
+    f64::from(hits) / f64::from(SIZE * SIZE)
+}
+
 /// Loads `dir/file`, prints its warnings, renders it with PT and PSSMLT and checks each image.
 fn check(dir: &str, file: &str) {
     let path = third_party().join(dir).join(file);
     let start = Instant::now();
-    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{dir}: {e}"));
+    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{dir}: {e}"));
     println!(
         "{dir}: loaded in {:.2?}: {} triangles, {} materials, {} textures",
         start.elapsed(),
@@ -86,6 +109,20 @@ fn check(dir: &str, file: &str) {
         println!("{dir}: warning: {w}");
     }
     let mut failures = Vec::new();
+    scene.set_resolution(SIZE, SIZE);
+    let covered = coverage(&scene);
+    println!(
+        "{dir}: the model covers {:.1} % of the pixel centres",
+        100.0 * covered
+    );
+    if covered < MIN_COVERAGE {
+        failures.push(format!(
+            "{dir}: camera rays hit the model at only {:.1} % of the pixel centres (< {:.0} %): \
+             the framing misses it or sees it edge-on",
+            100.0 * covered,
+            100.0 * MIN_COVERAGE
+        ));
+    }
     for integrator in [IntegratorKind::Pt, IntegratorKind::Pssmlt] {
         let name = integrator.name();
         let out = render(
