@@ -91,3 +91,79 @@ mod tests {
         assert!(positive("0").is_err() && positive("-1").is_err() && positive("inf").is_err());
     }
 }
+
+/// The value of `--env`.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum EnvArg {
+    /// No environment.
+    None,
+    /// A constant radiance.
+    Rgb([f32; 3]),
+    /// An equirectangular map file.
+    File(std::path::PathBuf),
+}
+
+/// The largest radiance component `--env R,G,B` accepts.
+const MAX_ENV_RADIANCE: f32 = 1e6;
+
+/// Parses `--env`: `none`, `R,G,B` or `V` (finite, 0..=1e6), or an existing .exr/.hdr/.pfm
+/// file.
+pub(crate) fn environment(text: &str) -> Result<EnvArg, String> {
+    let t = text.trim();
+    if t.eq_ignore_ascii_case("none") {
+        return Ok(EnvArg::None);
+    }
+    let parts: Vec<&str> = t.split(',').map(str::trim).collect();
+    let numbers: Option<Vec<f32>> = parts.iter().map(|p| p.parse::<f32>().ok()).collect();
+    if let Some(v) = numbers {
+        let rgb = match v.as_slice() {
+            [g] => [*g; 3],
+            [r, g, b] => [*r, *g, *b],
+            _ => {
+                return Err(format!(
+                    "expected `none`, `R,G,B`, a grey value or a file, got '{text}'"
+                ))
+            }
+        };
+        if rgb
+            .iter()
+            .all(|c| c.is_finite() && (0.0..=MAX_ENV_RADIANCE).contains(c))
+        {
+            return Ok(EnvArg::Rgb(rgb));
+        }
+        return Err(format!(
+            "radiance components must be in 0..={MAX_ENV_RADIANCE}, got '{text}'"
+        ));
+    }
+    let path = std::path::PathBuf::from(t);
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if !matches!(ext.as_deref(), Some("exr" | "hdr" | "pfm")) {
+        return Err(format!(
+            "expected `none`, `R,G,B`, a grey value or an .exr/.hdr/.pfm map, got '{text}'"
+        ));
+    }
+    if !path.is_file() {
+        return Err(format!("environment map '{text}': no such file"));
+    }
+    Ok(EnvArg::File(path))
+}
+
+/// Parses `--env-rotate` degrees: finite, -360..=360.
+pub(crate) fn env_rotation(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && (-360.0..=360.0).contains(&v) => Ok(v),
+        _ => Err(format!("expected degrees in -360..=360, got '{text}'")),
+    }
+}
+
+/// Parses `--env-strength`: finite, 0..=1e6.
+pub(crate) fn env_strength(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && (0.0..=MAX_ENV_RADIANCE).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "expected a multiplier in 0..={MAX_ENV_RADIANCE}, got '{text}'"
+        )),
+    }
+}

@@ -8,8 +8,9 @@ use clap::Args;
 use pss::SmallMutation;
 use render::image_io;
 use render::integrator::{IntegratorKind, INTEGRATORS};
+use render::light::EnvironmentLight;
 use render::mlt::LargeStepMode;
-use render::scene::Scene;
+use render::scene::{LoadOptions, Scene};
 use render::session::{self, Budget, McmcSettings, RenderOutput, RenderSettings};
 
 use super::integrator::IntegratorChoice;
@@ -32,6 +33,11 @@ pub(crate) struct RenderArgs {
     /// A glTF 2.0 scene (.gltf or .glb) [default: the built-in Cornell box].
     #[arg(value_name = "SCENE")]
     scene: Option<PathBuf>,
+    /// Let the scene's buffer and image URIs name files outside the scene file's folder
+    /// (absolute paths, `..`, `file://` URIs, symbolic links leading out). Without it such
+    /// URIs are an error. Only regular files are read either way.
+    #[arg(long)]
+    allow_external_files: bool,
     /// The light-transport algorithm.
     #[arg(long, value_enum, default_value = INTEGRATORS[0].name)]
     integrator: IntegratorChoice,
@@ -92,6 +98,17 @@ pub(crate) struct RenderArgs {
     /// Exposure of the PNG preview in stops, -64..=64 (the EXR is never scaled).
     #[arg(long, allow_negative_numbers = true, value_name = "STOPS", default_value = "0", value_parser = parse::stops)]
     exposure: f32,
+    /// Environment light: `none`, a radiance `R,G,B` or grey `V` (each in 0..=1e6), or an
+    /// equirectangular map (.exr, .hdr, .pfm; +Y up, image centre towards -Z) [default: the
+    /// scene's lights; a scene without any light gets a uniform environment of radiance 1].
+    #[arg(long, value_name = "none|R,G,B|FILE", value_parser = parse::environment)]
+    env: Option<parse::EnvArg>,
+    /// Rotation of the environment about +Y in degrees, -360..=360.
+    #[arg(long, allow_negative_numbers = true, value_name = "DEG", default_value = "0", requires = "env", value_parser = parse::env_rotation)]
+    env_rotate: f32,
+    /// Multiplier of the environment's radiance, 0..=1e6.
+    #[arg(long, allow_negative_numbers = true, value_name = "S", default_value = "1", requires = "env", value_parser = parse::env_strength)]
+    env_strength: f32,
 }
 
 /// The default `--spp`.
@@ -134,7 +151,40 @@ fn check_paths(args: &RenderArgs) -> CliResult<PathBuf> {
         )
         .into());
     }
-    Ok(args.output.with_extension("png"))
+    let png = args.output.with_extension("png");
+    probe_writable(&args.output, "--output")?;
+    probe_writable(&png, "the PNG preview")?;
+    Ok(png)
+}
+
+/// Fails unless `path` can be written, without changing anything: an existing regular file is
+/// opened for writing without truncation; a missing one is created and removed again. So a
+/// read-only directory, an output path that is a directory or an unwritable file is reported
+/// before rendering, not after.
+fn probe_writable(path: &Path, what: &str) -> CliResult<()> {
+    let fail = |why: &dyn std::fmt::Display| -> Box<dyn std::error::Error + Send + Sync> {
+        format!("{what} '{}' cannot be written: {why}", path.display()).into()
+    };
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_dir() => Err(fail(&"it is a directory")),
+        Ok(meta) if !meta.is_file() => Err(fail(&"it is not a regular file")),
+        Ok(_) => {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(|e| fail(&e))?;
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(path)
+                .map_err(|e| fail(&e))?;
+            std::fs::remove_file(path).map_err(|e| fail(&e))
+        }
+        Err(e) => Err(fail(&e)),
+    }
 }
 
 /// Builds the session settings from validated flags.
@@ -176,10 +226,29 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
     let png_path = check_paths(&args)?;
     let settings = settings(&args);
 
-    let scene = match &args.scene {
+    let mut scene = match &args.scene {
         None => Scene::cornell_box(settings.width, settings.height),
-        Some(path) => Scene::load(path)?,
+        Some(path) => Scene::load_with(
+            path,
+            &LoadOptions {
+                allow_external_files: args.allow_external_files,
+            },
+        )?,
     };
+    if let Some(env) = &args.env {
+        let environment = match env {
+            parse::EnvArg::None => None,
+            parse::EnvArg::Rgb(rgb) => Some(
+                EnvironmentLight::constant(render::glam::Vec3::from(*rgb) * args.env_strength)
+                    .rotated(args.env_rotate),
+            ),
+            parse::EnvArg::File(path) => Some(
+                EnvironmentLight::from_file(path, args.env_strength, args.env_rotate)
+                    .map_err(|e| format!("--env: {e}"))?,
+            ),
+        };
+        scene.set_environment(environment);
+    }
     for warning in &scene.warnings {
         eprintln!("warning: {warning}");
     }

@@ -1,5 +1,6 @@
 //! Ray queries against a triangle mesh through an obvhs compressed wide BVH (CWBVH):
-//! closest hit with barycentrics, any hit for shadow rays, and robust ray-origin offsetting.
+//! closest hit with barycentrics, any hit for shadow rays, both optionally with a per-hit
+//! acceptance filter (alpha-mask cut-outs), and robust ray-origin offsetting.
 
 use std::time::Duration;
 
@@ -143,6 +144,75 @@ impl Bvh {
         let (traversal, exact) = query_rays(origin, dir, t_max);
         !bvh.ray_traverse_miss(traversal, |_, id| {
             if self.tris[id].intersect(&exact).is_finite() {
+                0.0
+            } else {
+                f32::INFINITY
+            }
+        })
+    }
+
+    /// As [`Bvh::intersect`], but a triangle hit counts only if `accept(triangle, barycentrics)`
+    /// is true (an any-hit filter: alpha-mask cut-outs let rays through). `accept` is called
+    /// only for hits closer than the closest accepted hit so far, so the result is the closest
+    /// accepted hit in one traversal.
+    #[inline]
+    #[must_use]
+    pub fn intersect_filtered(
+        &self,
+        origin: Vec3A,
+        dir: Vec3A,
+        t_max: f32,
+        mut accept: impl FnMut(u32, Vec2) -> bool,
+    ) -> Option<Hit> {
+        let bvh = self.bvh.as_ref()?;
+        if !(origin.is_finite() && dir.is_finite()) || dir == Vec3A::ZERO || t_max.is_nan() {
+            return None;
+        }
+        let (traversal, exact) = query_rays(origin, dir, t_max);
+        let mut hit = RayHit::none();
+        let found = bvh.ray_traverse(traversal, &mut hit, |ray, id| {
+            let t = self.tris[id].intersect(&exact) + BACKOFF;
+            if t < ray.tmax && accept(self.tri_ids[id], barycentrics(&self.tris[id], origin, dir)) {
+                t
+            } else {
+                f32::INFINITY
+            }
+        });
+        if !found {
+            return None;
+        }
+        let slot = hit.primitive_id as usize;
+        let tri = &self.tris[slot];
+        Some(Hit {
+            t: (hit.t - BACKOFF).max(0.0),
+            triangle: self.tri_ids[slot],
+            barycentrics: barycentrics(tri, origin, dir),
+        })
+    }
+
+    /// As [`Bvh::occluded`], but only triangle hits with `accept(triangle, barycentrics)` true
+    /// block the segment.
+    #[inline]
+    #[must_use]
+    pub fn occluded_filtered(
+        &self,
+        origin: Vec3A,
+        dir: Vec3A,
+        t_max: f32,
+        mut accept: impl FnMut(u32, Vec2) -> bool,
+    ) -> bool {
+        let Some(bvh) = self.bvh.as_ref() else {
+            return false;
+        };
+        if !(origin.is_finite() && dir.is_finite()) || dir == Vec3A::ZERO || t_max.is_nan() {
+            return true;
+        }
+        let (traversal, exact) = query_rays(origin, dir, t_max);
+        !bvh.ray_traverse_miss(traversal, |_, id| {
+            let tri = &self.tris[id];
+            if tri.intersect(&exact).is_finite()
+                && accept(self.tri_ids[id], barycentrics(tri, origin, dir))
+            {
                 0.0
             } else {
                 f32::INFINITY
@@ -362,6 +432,49 @@ mod tests {
             }
         }
         assert_eq!(self_hits, 0);
+    }
+
+    /// The filter removes hits: the closest accepted hit is found behind rejected ones, a
+    /// rejected hit does not occlude, and an accept-all filter equals the unfiltered query.
+    #[test]
+    fn filtered_queries_skip_rejected_hits() {
+        let mut m = quad_mesh(); // z = 0, triangles 0 and 1
+        let q = |z: f32| {
+            [
+                Vec3A::new(-1.0, -1.0, z),
+                Vec3A::new(1.0, -1.0, z),
+                Vec3A::new(1.0, 1.0, z),
+                Vec3A::new(-1.0, 1.0, z),
+            ]
+        };
+        m.add_quad(q(1.0), 1); // triangles 2 and 3, in front
+        let bvh = Bvh::build(&m);
+        let o = Vec3A::new(0.3, -0.2, 2.0);
+        let all = bvh.intersect_filtered(o, -Vec3A::Z, f32::INFINITY, |_, _| true);
+        assert_eq!(all, bvh.intersect(o, -Vec3A::Z, f32::INFINITY));
+        assert!(all.unwrap().triangle >= 2);
+        // Reject the front quad: the back one is hit, at t = 2.
+        let mut calls = Vec::new();
+        let back = bvh
+            .intersect_filtered(o, -Vec3A::Z, f32::INFINITY, |t, b| {
+                calls.push((t, b));
+                t < 2
+            })
+            .unwrap();
+        assert!(back.triangle < 2 && (back.t - 2.0).abs() < 1e-6);
+        // The filter saw the front triangle with its barycentrics.
+        let (front_tri, front_b) = *calls.iter().find(|(t, _)| *t >= 2).unwrap();
+        let [p0, p1, p2] = m.vertices(front_tri as usize);
+        let p = p0 * (1.0 - front_b.x - front_b.y) + p1 * front_b.x + p2 * front_b.y;
+        assert!((p - Vec3A::new(0.3, -0.2, 1.0)).length() < 1e-5, "{p}");
+        // Rejecting everything: a miss, not occluded.
+        assert!(bvh
+            .intersect_filtered(o, -Vec3A::Z, f32::INFINITY, |_, _| false)
+            .is_none());
+        assert!(!bvh.occluded_filtered(o, -Vec3A::Z, 5.0, |_, _| false));
+        assert!(bvh.occluded_filtered(o, -Vec3A::Z, 5.0, |t, _| t < 2));
+        assert!(!bvh.occluded_filtered(o, -Vec3A::Z, 1.5, |t, _| t < 2));
+        assert!(bvh.occluded_filtered(o, -Vec3A::Z, 1.5, |_, _| true));
     }
 
     #[test]

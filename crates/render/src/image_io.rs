@@ -61,8 +61,16 @@ pub enum ImageError {
         /// What was wrong.
         reason: String,
     },
+    /// The Radiance HDR file is malformed.
+    #[error("{path}: not a readable Radiance HDR file: {reason}")]
+    Hdr {
+        /// The file.
+        path: PathBuf,
+        /// What the decoder reported.
+        reason: String,
+    },
     /// The file's extension names no image format this crate reads.
-    #[error("{path}: unsupported image format (expected .exr or .pfm)")]
+    #[error("{path}: unsupported image format (expected .exr, .pfm or .hdr)")]
     UnsupportedFormat {
         /// The file.
         path: PathBuf,
@@ -154,7 +162,8 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), ImageError
     .map_err(|e| exr_error(path, e))
 }
 
-/// Reads an image by extension: `.exr` ([`read_exr`]) or `.pfm` ([`read_pfm`]).
+/// Reads an image by extension: `.exr` ([`read_exr`]), `.pfm` ([`read_pfm`]) or `.hdr`
+/// ([`read_hdr`]).
 ///
 /// # Errors
 /// [`ImageError::UnsupportedFormat`] for other extensions, else as the reader.
@@ -166,10 +175,49 @@ pub fn read_image(path: impl AsRef<Path>) -> Result<Image, ImageError> {
     match ext.as_deref() {
         Some("exr") => read_exr(path),
         Some("pfm") => read_pfm(path),
+        Some("hdr") => read_hdr(path),
         _ => Err(ImageError::UnsupportedFormat {
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// Reads a Radiance RGBE (`.hdr`) image, the usual format of downloadable environment maps,
+/// through the `image` crate; the size is checked against [`MAX_DIMENSION`] before decoding.
+///
+/// # Errors
+/// [`ImageError::Io`] if the file cannot be opened, [`ImageError::InvalidSize`] for absurd
+/// sizes, [`ImageError::Exr`]-style decode errors as [`ImageError::Hdr`].
+pub fn read_hdr(path: impl AsRef<Path>) -> Result<Image, ImageError> {
+    let path = path.as_ref();
+    let hdr_error = |reason: String| ImageError::Hdr {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let open = || {
+        image::ImageReader::open(path)
+            .map_err(|source| ImageError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+            .map(|r| {
+                let mut r = r;
+                r.set_format(image::ImageFormat::Hdr);
+                r
+            })
+    };
+    let (w, h) = open()?
+        .into_dimensions()
+        .map_err(|e| hdr_error(e.to_string()))?;
+    let (w, h) = (w as usize, h as usize);
+    check_size(path, w, h, w.saturating_mul(h))?;
+    let decoded = open()?.decode().map_err(|e| hdr_error(e.to_string()))?;
+    let rgb = decoded.into_rgb32f();
+    let mut image = Image::new(w, h);
+    for (dst, px) in image.pixels.iter_mut().zip(rgb.pixels()) {
+        *dst = px.0;
+    }
+    Ok(image)
 }
 
 /// Reads a colour Portable Float Map (`PF` header, width and height, scale whose sign gives

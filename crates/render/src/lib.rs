@@ -58,6 +58,8 @@ pub mod session;
 mod test_util;
 pub mod warp;
 
+/// The vector maths crate of the public API (positions, colours), re-exported.
+pub use glam;
 pub use bdpt::{render_bdpt, BdptOutput, BdptParams};
 pub use budget::Budget;
 pub use camera::Camera;

@@ -1,13 +1,19 @@
 //! Indexed triangle meshes in world space: positions, shading normals, UVs and a material per
-//! triangle, plus a few procedural shapes (quads, boxes, spheres) for built-in scenes and tests.
+//! triangle (optionally vertex colours, tangents and a second UV set), plus a few procedural
+//! shapes (quads, boxes, spheres) for built-in scenes and tests.
 
-use glam::{Mat3, Mat4, Vec2, Vec3, Vec3A};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec3A, Vec4};
 
 /// An indexed triangle mesh in world space.
 ///
 /// Every vertex has a position, a shading normal (`Vec3A::ZERO` = none: the geometric normal
 /// is used) and a texture coordinate. Triangles are counter-clockwise seen from their front
 /// side (glTF's convention), so the geometric normal is `(p1 - p0) x (p2 - p0)`.
+///
+/// Vertex colours, tangents and the second UV set are optional: each of these vectors is
+/// either empty (no vertex has one; nothing is stored) or has one entry per vertex, vertices
+/// without one holding the neutral value (white, zero tangent, zero UV). The `set_*` methods
+/// create a vector on first use and [`Mesh::add_vertex`] keeps existing ones in step.
 #[derive(Clone, Debug, Default)]
 pub struct Mesh {
     /// Vertex positions.
@@ -16,6 +22,13 @@ pub struct Mesh {
     pub normals: Vec<Vec3A>,
     /// Per-vertex texture coordinates (glTF convention: `(0, 0)` = top-left of the image).
     pub uvs: Vec<Vec2>,
+    /// Second per-vertex texture coordinates (glTF `TEXCOORD_1`), or empty.
+    pub uvs1: Vec<Vec2>,
+    /// Per-vertex linear RGBA colours (glTF `COLOR_0`, white = none), or empty.
+    pub colors: Vec<Vec4>,
+    /// Per-vertex tangents (glTF `TANGENT`): `xyz` a unit tangent along increasing `u`, `w` the
+    /// handedness `±1` (bitangent `= w (normal x tangent)`); zero = none. Or empty.
+    pub tangents: Vec<Vec4>,
     /// Vertex indices of each triangle.
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle (into [`crate::scene::Scene::materials`]).
@@ -41,7 +54,37 @@ impl Mesh {
         self.positions.push(position);
         self.normals.push(normal);
         self.uvs.push(uv);
+        if !self.uvs1.is_empty() {
+            self.uvs1.push(Vec2::ZERO);
+        }
+        if !self.colors.is_empty() {
+            self.colors.push(Vec4::ONE);
+        }
+        if !self.tangents.is_empty() {
+            self.tangents.push(Vec4::ZERO);
+        }
         index
+    }
+
+    /// Sets the second UV set of vertex `v` (creating the set on first use).
+    pub fn set_uv1(&mut self, v: u32, uv: Vec2) {
+        set_attribute(&mut self.uvs1, self.positions.len(), Vec2::ZERO, v, uv);
+    }
+
+    /// Sets the colour of vertex `v` (creating the colours on first use).
+    pub fn set_color(&mut self, v: u32, color: Vec4) {
+        set_attribute(&mut self.colors, self.positions.len(), Vec4::ONE, v, color);
+    }
+
+    /// Sets the tangent of vertex `v` (creating the tangents on first use).
+    pub fn set_tangent(&mut self, v: u32, tangent: Vec4) {
+        set_attribute(
+            &mut self.tangents,
+            self.positions.len(),
+            Vec4::ZERO,
+            v,
+            tangent,
+        );
     }
 
     /// Adds a triangle over existing vertices.
@@ -135,16 +178,35 @@ impl Mesh {
         }
     }
 
-    /// Appends `other` transformed by `transform` (normals by its inverse transpose), shifting
-    /// its material ids by `material_offset`.
+    /// Appends `other` transformed by `transform` (normals by its inverse transpose, tangents
+    /// by its linear part with the handedness flipped by a mirroring transform), shifting its
+    /// material ids by `material_offset`. Optional attributes present in either mesh are kept
+    /// (neutral values where one mesh had none).
     pub fn append_transformed(&mut self, other: &Mesh, transform: Mat4, material_offset: u32) {
         let base = self.positions.len() as u32;
-        let normal_matrix = Mat3::from_mat4(transform).inverse().transpose();
+        let linear = Mat3::from_mat4(transform);
+        let normal_matrix = linear.inverse().transpose();
         let flip = transform.determinant() < 0.0;
         for i in 0..other.positions.len() {
             let p = transform.transform_point3(Vec3::from(other.positions[i]));
             let n = normal_matrix * Vec3::from(other.normals[i]);
-            self.add_vertex(p.into(), n.normalize_or_zero().into(), other.uvs[i]);
+            let v = self.add_vertex(p.into(), n.normalize_or_zero().into(), other.uvs[i]);
+            if let Some(&uv) = other.uvs1.get(i) {
+                self.set_uv1(v, uv);
+            }
+            if let Some(&c) = other.colors.get(i) {
+                self.set_color(v, c);
+            }
+            if let Some(&t) = other.tangents.get(i) {
+                let xyz = (linear * t.truncate()).normalize_or_zero();
+                let w = if flip { -t.w } else { t.w };
+                let t = if xyz == Vec3::ZERO {
+                    Vec4::ZERO
+                } else {
+                    xyz.extend(w)
+                };
+                self.set_tangent(v, t);
+            }
         }
         for (t, &m) in other.triangles.iter().zip(&other.material_ids) {
             let t = t.map(|i| i + base);
@@ -165,6 +227,62 @@ impl Mesh {
         ]
     }
 
+    /// Interpolates the per-vertex values `attr` of triangle `tri` at barycentrics `b`
+    /// (`(b1, b2)`, with `b0 = max(1 - b1 - b2, 0)` as in the hit point).
+    #[inline]
+    fn interpolate<T>(&self, attr: &[T], tri: usize, b: Vec2) -> T
+    where
+        T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+    {
+        let [i0, i1, i2] = self.triangles[tri].map(|i| i as usize);
+        let b0 = (1.0 - b.x - b.y).max(0.0);
+        attr[i0] * b0 + attr[i1] * b.x + attr[i2] * b.y
+    }
+
+    /// `TEXCOORD_0` of triangle `tri` at barycentrics `b`.
+    #[inline]
+    #[must_use]
+    pub fn uv_at(&self, tri: usize, b: Vec2) -> Vec2 {
+        self.interpolate(&self.uvs, tri, b)
+    }
+
+    /// `TEXCOORD_1` of triangle `tri` at barycentrics `b` (`TEXCOORD_0` if the mesh has no
+    /// second UV set).
+    #[inline]
+    #[must_use]
+    pub fn uv1_at(&self, tri: usize, b: Vec2) -> Vec2 {
+        if self.uvs1.is_empty() {
+            self.uv_at(tri, b)
+        } else {
+            self.interpolate(&self.uvs1, tri, b)
+        }
+    }
+
+    /// Both UV sets `[TEXCOORD_0, TEXCOORD_1]` of triangle `tri` at barycentrics `b` (see
+    /// [`Mesh::uv1_at`]).
+    #[inline]
+    #[must_use]
+    pub fn tex_coords(&self, tri: usize, b: Vec2) -> [Vec2; 2] {
+        let uv0 = self.uv_at(tri, b);
+        if self.uvs1.is_empty() {
+            [uv0; 2]
+        } else {
+            [uv0, self.interpolate(&self.uvs1, tri, b)]
+        }
+    }
+
+    /// The vertex colour (linear RGBA) of triangle `tri` at barycentrics `b`; white if the mesh
+    /// has no colours.
+    #[inline]
+    #[must_use]
+    pub fn color_at(&self, tri: usize, b: Vec2) -> Vec4 {
+        if self.colors.is_empty() {
+            Vec4::ONE
+        } else {
+            self.interpolate(&self.colors, tri, b)
+        }
+    }
+
     /// The area of triangle `tri`.
     #[must_use]
     pub fn area(&self, tri: usize) -> f32 {
@@ -174,11 +292,47 @@ impl Mesh {
 
     /// Removes triangles that cannot be rendered: an index out of range, a non-finite or
     /// absurdly large (> 1e18) coordinate, or zero area. Vertex attributes that are not finite
-    /// are reset (normals to zero, UVs to the origin). Returns the number of triangles removed.
+    /// are reset (normals and tangents to zero, UVs to the origin, colours to white); colours
+    /// are clamped to `[0, inf)` (alpha to `[0, 1]`) and tangents normalised with a handedness
+    /// of `±1`. Returns the number of triangles removed.
     pub fn remove_invalid(&mut self) -> usize {
         let n = self.positions.len();
         self.normals.resize(n, Vec3A::ZERO);
         self.uvs.resize(n, Vec2::ZERO);
+        if !self.uvs1.is_empty() {
+            self.uvs1.resize(n, Vec2::ZERO);
+        }
+        for uv in &mut self.uvs1 {
+            if !uv.is_finite() {
+                *uv = Vec2::ZERO;
+            }
+        }
+        if !self.colors.is_empty() {
+            self.colors.resize(n, Vec4::ONE);
+        }
+        for c in &mut self.colors {
+            *c = if c.is_finite() {
+                let rgb = c.truncate().max(Vec3::ZERO);
+                rgb.extend(c.w.clamp(0.0, 1.0))
+            } else {
+                Vec4::ONE
+            };
+        }
+        if !self.tangents.is_empty() {
+            self.tangents.resize(n, Vec4::ZERO);
+        }
+        for t in &mut self.tangents {
+            let xyz = if t.is_finite() {
+                t.truncate().normalize_or_zero()
+            } else {
+                Vec3::ZERO
+            };
+            *t = if xyz == Vec3::ZERO {
+                Vec4::ZERO
+            } else {
+                xyz.extend(if t.w < 0.0 { -1.0 } else { 1.0 })
+            };
+        }
         for nrm in &mut self.normals {
             *nrm = if nrm.is_finite() {
                 nrm.normalize_or_zero()
@@ -231,6 +385,17 @@ impl Mesh {
             hi = hi.max(p);
         }
         Some((lo, hi))
+    }
+}
+
+/// Sets `attr[v] = value`, first growing an empty `attr` to `n` entries of `neutral`. A vertex
+/// index out of range is ignored.
+fn set_attribute<T: Copy>(attr: &mut Vec<T>, n: usize, neutral: T, v: u32, value: T) {
+    if attr.len() < n {
+        attr.resize(n, neutral);
+    }
+    if let Some(slot) = attr.get_mut(v as usize) {
+        *slot = value;
     }
 }
 
@@ -290,5 +455,73 @@ mod tests {
         assert_eq!(m.triangle_count(), 1);
         assert_eq!(m.normals[1], Vec3A::ZERO);
         assert_eq!(m.uvs[1], Vec2::ZERO);
+    }
+
+    #[test]
+    fn attribute_interpolation() {
+        let mut m = Mesh::new();
+        let a = m.add_vertex(Vec3A::ZERO, Vec3A::Z, Vec2::ZERO);
+        let b = m.add_vertex(Vec3A::X, Vec3A::Z, Vec2::X);
+        let c = m.add_vertex(Vec3A::Y, Vec3A::Z, Vec2::Y);
+        m.add_triangle([a, b, c], 0);
+        let bc = Vec2::new(0.25, 0.5);
+        assert_eq!(m.uv_at(0, bc), Vec2::new(0.25, 0.5));
+        assert_eq!(m.tex_coords(0, bc), [Vec2::new(0.25, 0.5); 2]);
+        assert_eq!(m.color_at(0, bc), Vec4::ONE);
+        m.set_uv1(c, Vec2::splat(2.0));
+        m.set_color(a, Vec4::new(0.0, 0.0, 0.0, 0.0));
+        assert_eq!(m.uv1_at(0, bc), Vec2::splat(1.0));
+        assert_eq!(m.color_at(0, bc), Vec4::new(0.75, 0.75, 0.75, 0.75));
+    }
+
+    #[test]
+    fn optional_attributes_stay_in_step() {
+        let mut m = Mesh::new();
+        let a = m.add_vertex(Vec3A::ZERO, Vec3A::Z, Vec2::ZERO);
+        assert!(m.colors.is_empty() && m.tangents.is_empty() && m.uvs1.is_empty());
+        let b = m.add_vertex(Vec3A::X, Vec3A::Z, Vec2::X);
+        m.set_color(b, Vec4::new(1.0, 0.0, 0.0, 0.5));
+        assert_eq!(m.colors, vec![Vec4::ONE, Vec4::new(1.0, 0.0, 0.0, 0.5)]);
+        let c = m.add_vertex(Vec3A::Y, Vec3A::Z, Vec2::Y);
+        assert_eq!(m.colors[c as usize], Vec4::ONE);
+        m.set_tangent(a, Vec4::new(2.0, 0.0, 0.0, -3.0));
+        m.set_uv1(c, Vec2::splat(f32::NAN));
+        m.set_color(a, Vec4::new(-1.0, f32::NAN, 0.0, 1.0));
+        m.add_triangle([a, b, c], 0);
+        assert_eq!(m.remove_invalid(), 0);
+        assert_eq!(m.tangents[0], Vec4::new(1.0, 0.0, 0.0, -1.0));
+        assert_eq!(m.tangents[1], Vec4::ZERO);
+        assert_eq!(m.uvs1[2], Vec2::ZERO);
+        assert_eq!(m.colors[0], Vec4::ONE);
+    }
+
+    /// Tangents follow the surface under scaling and rotation, and a mirror flips their
+    /// handedness so the bitangent `w (n x t)` is the transformed bitangent.
+    #[test]
+    fn append_transforms_tangents() {
+        let mut src = Mesh::new();
+        let v = src.add_vertex(Vec3A::ZERO, Vec3A::Z, Vec2::ZERO);
+        src.set_tangent(v, Vec4::new(1.0, 0.0, 0.0, 1.0));
+        src.set_color(v, Vec4::new(0.2, 0.3, 0.4, 1.0));
+        let bitangent = |m: &Mesh, i: usize| {
+            let t = m.tangents[i];
+            Vec3::from(m.normals[i]).cross(t.truncate()) * t.w
+        };
+        assert!((bitangent(&src, 0) - Vec3::Y).length() < 1e-6);
+        // Mirror in x plus a non-uniform scale and a rotation about z.
+        let xf = Mat4::from_rotation_z(0.3) * Mat4::from_scale(Vec3::new(-2.0, 3.0, 1.0));
+        let mut dst = Mesh::new();
+        dst.add_vertex(Vec3A::ONE, Vec3A::Z, Vec2::ZERO); // a vertex without attributes
+        dst.append_transformed(&src, xf, 0);
+        assert_eq!(dst.colors.len(), 2);
+        assert_eq!(dst.colors[0], Vec4::ONE);
+        assert_eq!(dst.colors[1], src.colors[0]);
+        assert_eq!(dst.tangents[0], Vec4::ZERO);
+        let t = dst.tangents[1];
+        let want_t = xf.transform_vector3(Vec3::X).normalize();
+        assert!((t.truncate() - want_t).length() < 1e-6, "{t}");
+        let want_b = xf.transform_vector3(Vec3::Y).normalize();
+        assert!((bitangent(&dst, 1) - want_b).length() < 1e-5);
+        assert!(dst.uvs1.is_empty());
     }
 }

@@ -228,13 +228,13 @@ pub fn render(
     }
 }
 
-/// A note for the output if the scene has no emitters.
+/// The scene's notes (e.g. the default environment), and one if it has no light at all.
 fn emitter_notes(scene: &Scene) -> Vec<String> {
+    let mut notes = scene.notes.clone();
     if scene.lights().is_empty() {
-        vec!["the scene has no emitters: the image is black".to_owned()]
-    } else {
-        Vec::new()
+        notes.push("the scene has no light (and no environment): the image is black".to_owned());
     }
+    notes
 }
 
 /// BDPT's parameters (shared by BDPT and the MCMC path samplers) for `settings`.

@@ -120,7 +120,7 @@ fn node_mut<'v>(v: &'v mut Value, path: &[PathStep]) -> Option<&'v mut Value> {
 /// Values a JSON edit may write.
 fn interesting_value(k: u8) -> Value {
     let s = |t: &str| Value::from(t);
-    match k % 24 {
+    match k % 28 {
         0 => Value::from(0),
         1 => Value::from(-1),
         2 => Value::from(1),
@@ -144,6 +144,11 @@ fn interesting_value(k: u8) -> Value {
         20 => Value::from(vec![0, 1, 2]),
         21 => Value::from(vec![1e30, -1e30, f64::MAX]),
         22 => Value::from(4),
+        // Files the loader must refuse (outside the folder, not regular), not read forever.
+        23 => s("/dev/zero"),
+        24 => s("file:///dev/zero"),
+        25 => s("."),
+        26 => s("../data/tiny.bin"),
         _ => Value::from(65536),
     }
 }

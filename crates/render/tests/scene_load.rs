@@ -255,12 +255,16 @@ fn unsupported_features_are_warnings() {
     let mut v = embedded_json();
     let used = v["extensionsUsed"].as_array_mut().unwrap();
     used.push(Value::from("KHR_lights_punctual"));
-    used.push(Value::from("KHR_texture_transform"));
+    // Supported since issue 16: KHR_texture_transform and normal maps; still unsupported:
+    // clearcoat and occlusion textures (named in the one material warning).
+    used.push(Value::from("KHR_materials_clearcoat"));
+    v["materials"][0]["extensions"]["KHR_materials_clearcoat"] =
+        gltf::json::deserialize::from_str(r#"{"clearcoatFactor": 1}"#).unwrap();
     v["extensions"] = gltf::json::deserialize::from_str(
         r#"{"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 5.0}]}}"#,
     )
     .unwrap();
-    v["materials"][0]["normalTexture"] =
+    v["materials"][0]["occlusionTexture"] =
         gltf::json::deserialize::from_str(r#"{"index": 0}"#).unwrap();
     v["materials"][0]["alphaMode"] = Value::from("BLEND");
     v["meshes"][1]["primitives"][0]["mode"] = Value::from(1); // lines
@@ -268,8 +272,8 @@ fn unsupported_features_are_warnings() {
     let all = s.warnings.join("\n");
     for needle in [
         "KHR_lights_punctual",
-        "KHR_texture_transform",
-        "normal textures",
+        "KHR_materials_clearcoat",
+        "occlusionTexture",
         "alpha mode",
         "mode Lines",
     ] {
@@ -367,4 +371,382 @@ fn decode_b64(s: &str) -> Vec<u8> {
         }
     }
     out
+}
+
+/// A glTF with one mesh of `positions` and `indices` (u32), no camera, no material, the buffer
+/// as a data URI.
+fn mesh_gltf(positions: &[[f32; 3]], indices: &[u32]) -> Value {
+    let mut buf = Vec::new();
+    for p in positions {
+        for c in p {
+            buf.extend(c.to_le_bytes());
+        }
+    }
+    let pos_len = buf.len();
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for p in positions {
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    for i in indices {
+        buf.extend(i.to_le_bytes());
+    }
+    let json = format!(
+        r#"{{
+        "asset": {{"version": "2.0"}},
+        "scenes": [{{"nodes": [0]}}], "scene": 0,
+        "nodes": [{{"mesh": 0}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+        "accessors": [
+            {{"bufferView": 0, "componentType": 5126, "count": {}, "type": "VEC3",
+             "min": {lo:?}, "max": {hi:?}}},
+            {{"bufferView": 1, "componentType": 5125, "count": {}, "type": "SCALAR"}}],
+        "bufferViews": [
+            {{"buffer": 0, "byteOffset": 0, "byteLength": {pos_len}}},
+            {{"buffer": 0, "byteOffset": {pos_len}, "byteLength": {}}}],
+        "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}]
+    }}"#,
+        positions.len(),
+        indices.len(),
+        buf.len() - pos_len,
+        buf.len(),
+        encode_b64(&buf)
+    );
+    gltf::json::deserialize::from_str(&json).unwrap()
+}
+
+/// The 8 corners and 12 outward triangles of the box `[-h, h]^3`.
+fn box_mesh(h: f32) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut p = Vec::new();
+    for i in 0..8 {
+        let s = |bit: u32| if i >> bit & 1 == 1 { h } else { -h };
+        p.push([s(0), s(1), s(2)]);
+    }
+    #[rustfmt::skip]
+    let idx = vec![
+        0, 2, 1, 1, 2, 3, // z = -h
+        4, 5, 6, 5, 7, 6, // z = +h
+        0, 1, 4, 1, 5, 4, // y = -h
+        2, 6, 3, 3, 6, 7, // y = +h
+        0, 4, 2, 2, 4, 6, // x = -h
+        1, 3, 5, 3, 7, 5, // x = +h
+    ];
+    (p, idx)
+}
+
+/// The ray through the image centre hits the scene.
+fn centre_ray_hits(s: &Scene) -> bool {
+    let c = s.camera();
+    let ray = c.generate_ray(
+        Vec2::new(c.width() as f32 / 2.0, c.height() as f32 / 2.0),
+        Vec2::splat(0.5),
+        0.5,
+    );
+    s.intersect(&ray).is_some()
+}
+
+#[test]
+fn framing_ignores_a_stray_degenerate_triangle() {
+    let (mut p, mut idx) = box_mesh(0.25);
+    // One zero-area (collinear) triangle 1000 m away.
+    let base = p.len() as u32;
+    p.extend([[1000.0, 0.0, 0.0], [1001.0, 0.0, 0.0], [1002.0, 0.0, 0.0]]);
+    idx.extend([base, base + 1, base + 2]);
+    let s = Scene::from_gltf_slice(&to_bytes(&mesh_gltf(&p, &idx)), None).unwrap();
+    assert_eq!(s.mesh().triangle_count(), 12);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("1 degenerate")),
+        "{:?}",
+        s.warnings
+    );
+    let spec = s.camera_spec();
+    assert!(spec.to.length() < 1e-5, "framed {:?}", spec.to);
+    assert!(spec.from.length() < 2.0, "camera at {:?}", spec.from);
+    assert!(centre_ray_hits(&s));
+    // Control: framing the bounds with the stray triangle (what the loader did before)
+    // misses the box.
+    let lo = Vec3A::splat(-0.25);
+    let hi = Vec3A::new(1002.0, 0.25, 0.25);
+    let wrong = Scene::new(
+        s.mesh().clone(),
+        s.materials().to_vec(),
+        s.textures().to_vec(),
+        render::scene::CameraSpec::framing(lo, hi),
+        64,
+        64,
+    );
+    assert!(!centre_ray_hits(&wrong));
+    // A valid far triangle still counts (it is rendered), so the framing includes it.
+    let (mut p, mut idx) = box_mesh(0.25);
+    let base = p.len() as u32;
+    p.extend([[1000.0, 0.0, 0.0], [1001.0, 0.0, 0.0], [1000.0, 1.0, 0.0]]);
+    idx.extend([base, base + 1, base + 2]);
+    let s = Scene::from_gltf_slice(&to_bytes(&mesh_gltf(&p, &idx)), None).unwrap();
+    assert_eq!(s.mesh().triangle_count(), 13);
+    assert!(s.camera_spec().to.x > 400.0);
+}
+
+/// Loads the embedded fixture with its camera node (nodes[3]) edited by `edit`.
+fn with_camera_node(edit: impl FnOnce(&mut Value)) -> Result<Scene, String> {
+    let mut v = embedded_json();
+    assert_eq!(v["nodes"][3]["camera"], Value::from(0));
+    edit(&mut v["nodes"][3]);
+    Scene::from_gltf_slice(&to_bytes(&v), None).map_err(|e| e.to_string())
+}
+
+fn json(text: &str) -> Value {
+    gltf::json::deserialize::from_str(text).unwrap()
+}
+
+#[test]
+fn invalid_camera_nodes_are_errors_naming_node_and_field() {
+    // Control: the unedited camera and valid extras load without warnings.
+    let s = with_camera_node(|n| {
+        n["extras"] = json(
+            r#"{"aperture_radius": 0.05, "focus_distance": 3, "shutter_open": 0,
+                "shutter_close": 1, "motion_end_translation": [0.1, 0.5, 3]}"#,
+        );
+    })
+    .unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.camera_spec().thin_lens, Some((0.05, 3.0)));
+    assert!(s.camera_spec().motion.is_some());
+
+    let cases: [(&str, &[&str]); 12] = [
+        (
+            r#"{"scale": [0, 0, 0]}"#,
+            &["nodes[3]", "cannot place a camera"],
+        ),
+        (
+            r#"{"scale": [1, 0, 1]}"#,
+            &["nodes[3]", "cannot place a camera"],
+        ),
+        (
+            r#"{"translation": [0, 1e39, 3]}"#,
+            &["nodes[3]", "cannot place a camera"],
+        ),
+        (
+            r#"{"extras": {"aperture_radius": -0.1, "focus_distance": 2}}"#,
+            &["nodes[3].extras.aperture_radius", "negative"],
+        ),
+        (
+            r#"{"extras": {"aperture_radius": 0.1, "focus_distance": 0}}"#,
+            &["nodes[3].extras.focus_distance", "> 0"],
+        ),
+        (
+            r#"{"extras": {"aperture_radius": "wide", "focus_distance": 2}}"#,
+            &["nodes[3].extras.aperture_radius", "not a finite number"],
+        ),
+        (
+            r#"{"extras": {"aperture_radius": 1e300, "focus_distance": 2}}"#,
+            &["nodes[3].extras.aperture_radius", "not a finite number"],
+        ),
+        (
+            r#"{"extras": {"shutter_open": 1, "shutter_close": 0.5, "motion_end_translation": [0, 0, 0]}}"#,
+            &["nodes[3].extras.shutter_close", "before", "shutter_open"],
+        ),
+        (
+            r#"{"extras": {"shutter_open": 0, "shutter_close": 1, "motion_end_translation": [0, "x", 0]}}"#,
+            &["nodes[3].extras.motion_end_translation", "3 finite numbers"],
+        ),
+        (
+            r#"{"extras": {"shutter_open": 0, "shutter_close": 1, "motion_end_translation": [0, 1]}}"#,
+            &["nodes[3].extras.motion_end_translation", "3 finite numbers"],
+        ),
+        (
+            r#"{"extras": {"shutter_open": 0, "shutter_close": 1e40, "motion_end_translation": [0, 0, 1]}}"#,
+            &["nodes[3].extras.shutter_close", "not a finite number"],
+        ),
+        (
+            r#"{"extras": {"shutter_open": 0, "shutter_close": 1, "motion_end_translation": [0, 0, 1e39]}}"#,
+            &["nodes[3].extras.motion_end_translation"],
+        ),
+    ];
+    for (edit, needles) in cases {
+        let e = with_camera_node(|n| {
+            for (k, v) in json(edit).as_object().unwrap() {
+                n[k.as_str()] = v.clone();
+            }
+        })
+        .map(|_| ())
+        .unwrap_err();
+        for needle in needles {
+            assert!(e.contains(needle), "{edit}: '{needle}' missing from {e}");
+        }
+    }
+
+    // Incomplete extras are named warnings; the camera stays where the node puts it.
+    let s = with_camera_node(|n| {
+        n["extras"] = json(r#"{"aperture_radius": 0.1, "shutter_open": 0, "shutter_close": 1}"#);
+    })
+    .unwrap();
+    let all = s.warnings.join("\n");
+    assert!(
+        all.contains("nodes[3].extras has aperture_radius but no focus_distance"),
+        "{all}"
+    );
+    assert!(
+        all.contains("nodes[3].extras") && all.contains("motion_end_translation missing"),
+        "{all}"
+    );
+    assert_eq!(s.camera_spec().thin_lens, None);
+    assert_eq!(s.camera_spec().motion, None);
+    assert!((s.camera_spec().from - Vec3A::new(0.0, 0.5, 3.0)).length() < 1e-6);
+}
+
+#[test]
+fn camera_parameters_out_of_range_are_named_warnings() {
+    let mut v = embedded_json();
+    v["cameras"][0]["perspective"]["yfov"] = Value::from(4.0);
+    v["cameras"][0]["perspective"]["aspectRatio"] = Value::from(1000.0);
+    let s = Scene::from_gltf_slice(&to_bytes(&v), None).unwrap();
+    let all = s.warnings.join("\n");
+    assert!(
+        all.contains("cameras[0].perspective.yfov 4") && all.contains("0.8 is used"),
+        "{all}"
+    );
+    assert!(
+        all.contains("cameras[0].perspective.aspectRatio 1000") && all.contains("1 is used"),
+        "{all}"
+    );
+    assert_eq!(s.camera().height(), s.camera().width());
+}
+
+#[test]
+fn gltf_1_0_is_named_as_unsupported() {
+    // A glTF 1.0 document (objects keyed by id, not arrays).
+    let v1 = json(
+        r#"{"asset": {"version": "1.0"}, "meshes": {"m": {"primitives": []}},
+            "scene": "s", "scenes": {"s": {"nodes": []}}}"#,
+    );
+    let e = load_err(&v1);
+    assert!(
+        e.contains("asset.version") && e.contains("glTF 1.0 is not supported"),
+        "{e}"
+    );
+    // Pre-1.0 drafts: a top-level version and no asset.
+    let v0 = json(r#"{"version": "0.8", "meshes": {}}"#);
+    let e = load_err(&v0);
+    assert!(
+        e.contains("top-level \"version\"") && e.contains("glTF 1.0"),
+        "{e}"
+    );
+    let mut v3 = embedded_json();
+    v3["asset"]["version"] = Value::from("3.0");
+    assert!(load_err(&v3).contains("glTF 3.0 is not supported"));
+    // Control: 2.x loads.
+    let mut v21 = embedded_json();
+    v21["asset"]["version"] = Value::from("2.1");
+    assert!(Scene::from_gltf_slice(&to_bytes(&v21), None).is_ok());
+}
+
+#[test]
+fn a_utf8_bom_is_skipped_with_a_warning() {
+    let mut bytes = b"\xEF\xBB\xBF".to_vec();
+    bytes.extend(std::fs::read(data("tiny-embedded.gltf")).unwrap());
+    let s = Scene::from_gltf_slice(&bytes, None).unwrap();
+    assert_eq!(s.mesh().triangle_count(), 5);
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert!(
+        s.warnings[0].contains("byte-order mark"),
+        "{:?}",
+        s.warnings
+    );
+    // From a file too.
+    let path = tmp_dir("bom").join("bom.gltf");
+    std::fs::write(&path, &bytes).unwrap();
+    assert_eq!(Scene::load(&path).unwrap().mesh().triangle_count(), 5);
+}
+
+#[test]
+fn draco_compression_is_named() {
+    let draco =
+        r#"{"KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}}"#;
+    // Required: an error.
+    let mut v = embedded_json();
+    v["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push(Value::from("KHR_draco_mesh_compression"));
+    v["extensionsRequired"] = Value::from(vec!["KHR_draco_mesh_compression"]);
+    v["meshes"][1]["primitives"][0]["extensions"] = json(draco);
+    let e = load_err(&v);
+    assert!(
+        e.contains("KHR_draco_mesh_compression") && e.contains("not supported"),
+        "{e}"
+    );
+    // Used, with the uncompressed fallback: a warning naming the primitive; it is rendered.
+    v.as_object_mut().unwrap().remove("extensionsRequired");
+    let s = Scene::from_gltf_slice(&to_bytes(&v), None).unwrap();
+    let all = s.warnings.join("\n");
+    assert!(
+        all.contains("meshes[1].primitives[0] is Draco-compressed")
+            && all.contains("fallback data is used"),
+        "{all}"
+    );
+    assert_eq!(s.mesh().triangle_count(), 5);
+    // Used, without a fallback (as Draco encoders write it: accessors without bufferView).
+    for a in [8, 9, 10, 11] {
+        v["accessors"][a]
+            .as_object_mut()
+            .unwrap()
+            .remove("bufferView");
+    }
+    let s = Scene::from_gltf_slice(&to_bytes(&v), None).unwrap();
+    let all = s.warnings.join("\n");
+    assert!(
+        all.contains("meshes[1].primitives[0]") && all.contains("no uncompressed fallback"),
+        "{all}"
+    );
+    assert_eq!(s.mesh().triangle_count(), 4);
+}
+
+#[test]
+fn accessors_without_buffer_view_are_zero_filled() {
+    // TEXCOORD_0 of the floor (accessors[2]) without a bufferView: all UVs are (0, 0).
+    let mut v = embedded_json();
+    v["accessors"][2]
+        .as_object_mut()
+        .unwrap()
+        .remove("bufferView");
+    let s = Scene::from_gltf_slice(&to_bytes(&v), None).unwrap();
+    assert_eq!(s.mesh().triangle_count(), 5);
+    assert!(s.mesh().uvs[..4].iter().all(|uv| *uv == Vec2::ZERO));
+    // Control: with the view, the UVs are not all zero.
+    let s = Scene::from_gltf_slice(&to_bytes(&embedded_json()), None).unwrap();
+    assert!(s.mesh().uvs[..4].iter().any(|uv| *uv != Vec2::ZERO));
+    // POSITION without a bufferView: every vertex at the origin, so the primitive has no
+    // area and is dropped with a warning.
+    let mut v = embedded_json();
+    v["accessors"][8]
+        .as_object_mut()
+        .unwrap()
+        .remove("bufferView");
+    let s = Scene::from_gltf_slice(&to_bytes(&v), None).unwrap();
+    assert_eq!(s.mesh().triangle_count(), 4);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("1 degenerate")),
+        "{:?}",
+        s.warnings
+    );
+    // A huge count without data is refused rather than allocated.
+    v["accessors"][8]["count"] = Value::from(1u64 << 40);
+    let e = load_err(&v);
+    assert!(e.contains("accessors[8]") && e.contains("count"), "{e}");
+}
+
+#[test]
+fn sparse_accessors_are_an_error_naming_the_accessor() {
+    let mut v = embedded_json();
+    v["accessors"][0]["sparse"] = json(
+        r#"{"count": 1, "indices": {"bufferView": 3, "componentType": 5123},
+            "values": {"bufferView": 0}}"#,
+    );
+    let e = load_err(&v);
+    assert!(
+        e.contains("accessors[0]") && e.contains("sparse") && e.contains("not supported"),
+        "{e}"
+    );
 }

@@ -75,8 +75,9 @@ impl SplatGrid {
         self.height
     }
 
-    /// Adds `rgb * weight` to the pixel containing `raster`; splats outside the image or with
-    /// a non-finite product are ignored and return false.
+    /// Adds `rgb * weight` to the pixel containing `raster`; splats outside the image, with
+    /// a non-finite product (NaN or infinite), or that would make the pixel's sum overflow to
+    /// infinity are ignored and return false (the caller counts them as dropped).
     #[inline]
     pub fn add_rgb(&mut self, raster: [f32; 2], rgb: [f32; 3], weight: f64) -> bool {
         let (x, y) = (raster[0].floor(), raster[1].floor());
@@ -88,9 +89,11 @@ impl SplatGrid {
             return false;
         }
         let px = &mut self.data[y as usize * self.width + x as usize];
-        for c in 0..3 {
-            px[c] += v[c];
+        let sum = [px[0] + v[0], px[1] + v[1], px[2] + v[2]];
+        if !sum.iter().all(|c| c.is_finite()) {
+            return false;
         }
+        *px = sum;
         true
     }
 
@@ -106,13 +109,35 @@ impl SplatGrid {
         &self.data
     }
 
-    /// The pixels multiplied by `scale`, as f32 RGB (row-major).
+    /// The pixels multiplied by `scale`, as f32 RGB (row-major); see
+    /// [`SplatGrid::to_rgb32_checked`] for pixels that do not fit an f32 (here: black).
     #[must_use]
     pub fn to_rgb32(&self, scale: f64) -> Vec<[f32; 3]> {
-        self.data
+        self.to_rgb32_checked(scale).0
+    }
+
+    /// The pixels multiplied by `scale`, as f32 RGB (row-major), and the number of pixels
+    /// dropped (made black) because a channel is not a finite f32: the scaled f64 value is
+    /// NaN, infinite, or finite but above `f32::MAX` (about 3.4e38, which would turn into an
+    /// infinity in f32 — e.g. an emitter of radiance 3e38 seen directly). Every pixel value
+    /// returned is finite.
+    #[must_use]
+    pub fn to_rgb32_checked(&self, scale: f64) -> (Vec<[f32; 3]>, u64) {
+        let mut dropped = 0;
+        let pixels = self
+            .data
             .iter()
-            .map(|p| p.map(|c| (c * scale) as f32))
-            .collect()
+            .map(|p| {
+                let v = p.map(|c| (c * scale) as f32);
+                if v.iter().all(|c| c.is_finite()) {
+                    v
+                } else {
+                    dropped += 1;
+                    [0.0; 3]
+                }
+            })
+            .collect();
+        (pixels, dropped)
     }
 }
 
@@ -182,6 +207,36 @@ mod tests {
         h.merge(&g);
         h.merge(&g);
         assert_eq!(h.get(0, 1), [1.0, 2.0, 3.0]);
+    }
+
+    /// Infinite values never reach the image: an infinite splat, a sum that would overflow
+    /// f64, and a finite f64 pixel above `f32::MAX` are all dropped and counted.
+    #[test]
+    fn infinite_values_are_dropped_and_counted() {
+        let mut g = SplatGrid::new(3, 1);
+        assert!(!g.add_rgb([0.5, 0.5], [f32::INFINITY, 0.0, 0.0], 1.0));
+        // Finite f32 times a finite weight that overflows f64.
+        assert!(!g.add_rgb([0.5, 0.5], [f32::MAX; 3], f64::MAX));
+        assert_eq!(g.get(0, 0), [0.0; 3]);
+        // Two finite splats whose sum would be infinite: the second is dropped.
+        assert!(g.add_rgb([1.5, 0.5], [1.0; 3], 1e308));
+        assert!(!g.add_rgb([1.5, 0.5], [1.0; 3], 1e308));
+        assert_eq!(g.get(1, 0), [1e308; 3]);
+        // A finite f64 above f32::MAX: pixel 2 holds 3e38 * 2 = 6e38 after scaling.
+        assert!(g.add_rgb([2.5, 0.5], [3e38, 1.0, 1.0], 1.0));
+        let (px, dropped) = g.to_rgb32_checked(2.0);
+        assert_eq!(dropped, 2, "pixels 1 and 2 do not fit an f32");
+        assert!(px.iter().flatten().all(|c| c.is_finite()), "{px:?}");
+        assert_eq!(px[1], [0.0; 3]);
+        assert_eq!(px[2], [0.0; 3]);
+        // Control: at scale 1, pixel 2 fits (3e38 < f32::MAX).
+        let (px, dropped) = g.to_rgb32_checked(1e-300);
+        assert_eq!(dropped, 0);
+        assert!(px[1][0] > 0.0);
+        let (px, dropped) = g.to_rgb32_checked(1.0);
+        assert_eq!(dropped, 1);
+        assert_eq!(px[2], [3e38, 1.0, 1.0]);
+        assert_eq!(g.to_rgb32(1.0), px);
     }
 
     #[test]

@@ -93,20 +93,18 @@ pub fn connect<S: Sampler + ?Sized>(
             sampler.start_stream(Stream::Connection);
             let u_light = sampler.next_1d();
             let u_pos = sampler.next_2d();
-            if let Some(lp) = scene_api::sample_light_point(scene, u_light, u_pos) {
-                let d = lp.p - pt.p;
-                let d2 = d.length_squared();
-                let wi = d / d2.sqrt();
-                let cos_light = lp.n.dot(-wi).abs();
-                let le = scene_api::light_le(scene, lp.light, -wi);
-                if d2 > 0.0 && cos_light > 0.0 && lp.pdf_area > 0.0 && le != Vec3::ZERO {
-                    // Solid-angle density of the light sample at pt.
-                    let pdf = lp.pdf_area * d2 / cos_light;
-                    let mut v = Vertex::light(lp.p, lp.n, lp.light, le / pdf, 0.0, pt.time);
-                    v.pdf_fwd = v.pdf_light_origin(scene);
+            if let Some(ls) = scene_api::sample_li(scene, pt.p, u_light, u_pos) {
+                if ls.radiance != Vec3::ZERO {
+                    // ls.pdf: solid-angle density at pt (selection only for delta lights).
+                    let mut v =
+                        Vertex::light(ls.p, ls.n, ls.light, ls.radiance / ls.pdf, 0.0, pt.time);
+                    v.uv = ls.uv;
+                    v.infinite = ls.infinite;
+                    v.delta_light = ls.delta;
+                    v.pdf_fwd = v.pdf_light_origin(scene, pt);
                     let mut contrib = pt.beta * pt.f(&v, TransportMode::Radiance) * v.beta;
                     if pt.kind == VertexKind::Surface {
-                        contrib *= wi.dot(pt.ns()).abs();
+                        contrib *= ls.wi.dot(pt.ns()).abs();
                     }
                     if contrib != Vec3::ZERO && visible(scene, pt, &v) {
                         l = contrib;
@@ -194,9 +192,10 @@ fn mis_weight(
         q.delta = false;
     }
     // pt's reverse density: sampled from qs (or as a light origin when s = 0).
-    pt.pdf_rev = match (&qs, s) {
+    pt.pdf_rev = match (&qs, &pt_minus) {
         (Some(q), _) => q.pdf(scene, qs_minus.as_ref(), &pt),
-        (None, _) => pt.pdf_light_origin(scene),
+        (None, Some(pm)) => pt.pdf_light_origin(scene, pm),
+        (None, None) => 0.0,
     };
     let pt_minus_rev = pt_minus.map(|pm| match &qs {
         Some(q) => pt.pdf(scene, Some(q), &pm),
@@ -247,8 +246,15 @@ fn mis_weight(
             let v = &light[i];
             (v.pdf_fwd, v.pdf_rev, v.delta)
         };
-        // Area lights are never delta; the previous light vertex's delta flag otherwise.
-        let prev_delta = i > 0 && light[i - 1].delta;
+        // The strategy with i light vertices is impossible if the vertex before is delta,
+        // or, for i = 0 (the camera path hits the light), if the light is a delta light.
+        let prev_delta = if i > 0 {
+            light[i - 1].delta
+        } else if s == 1 {
+            qs.as_ref().is_some_and(|q| q.delta_light)
+        } else {
+            light[0].delta_light
+        };
         ri *= remap0(rev) / remap0(fwd);
         if !delta && !prev_delta {
             sum += pow(ri);

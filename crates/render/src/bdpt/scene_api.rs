@@ -5,6 +5,7 @@
 use glam::{Vec2, Vec3, Vec3A};
 
 use crate::camera::{CameraWiSample, Ray};
+use crate::light::{LeSample, LightSample};
 use crate::material::Bsdf;
 use crate::scene::Scene;
 
@@ -19,6 +20,7 @@ pub(crate) struct Hit {
     pub(crate) ns: Vec3A,
     pub(crate) bsdf: Bsdf,
     pub(crate) light: Option<u32>,
+    pub(crate) uv: Vec2,
 }
 
 #[inline]
@@ -31,6 +33,7 @@ pub(crate) fn intersect(scene: SceneRef<'_>, ray: &Ray) -> Option<Hit> {
         ns: si.ns,
         bsdf: scene.bsdf(&si),
         light: scene.lights().light_of_triangle(si.triangle),
+        uv: si.uv,
     })
 }
 
@@ -67,36 +70,77 @@ pub(crate) fn camera_sample_wi(
     scene.camera().sample_wi(reference, u, time)
 }
 
-/// A point sampled on an emitter (light choice by power, uniform by area).
-pub(crate) struct LightPoint {
-    pub(crate) p: Vec3A,
-    /// The light's front normal.
-    pub(crate) n: Vec3A,
-    pub(crate) light: u32,
-    /// Area density including the light selection probability.
-    pub(crate) pdf_area: f32,
+/// Samples incident light at `p` for a connection with `s = 1` (next-event estimation).
+#[inline]
+pub(crate) fn sample_li(
+    scene: SceneRef<'_>,
+    p: Vec3A,
+    u_light: f32,
+    u_pos: Vec2,
+) -> Option<LightSample> {
+    scene.sample_li(p, u_light, u_pos)
 }
 
+/// Samples an emitted ray for a light subpath's origin.
 #[inline]
-pub(crate) fn sample_light_point(
+pub(crate) fn sample_le(
     scene: SceneRef<'_>,
     u_light: f32,
     u_pos: Vec2,
-) -> Option<LightPoint> {
-    let lights = scene.lights();
-    let (index, pmf) = lights.select(u_light)?;
-    let light = &lights.lights()[index as usize];
-    Some(LightPoint {
-        p: light.sample_point(u_pos),
-        n: light.normal,
-        light: index,
-        pdf_area: pmf / light.area,
-    })
+    u_dir: Vec2,
+) -> Option<LeSample> {
+    scene.sample_le(u_light, u_pos, u_dir)
 }
 
-/// Area density of a light-subpath origin on light `light` (selection included).
+/// True for lights at infinity (environment, directional).
 #[inline]
-pub(crate) fn light_pdf_area(scene: SceneRef<'_>, light: u32) -> f32 {
+pub(crate) fn light_is_infinite(scene: SceneRef<'_>, light: u32) -> bool {
+    scene.lights().is_infinite(light)
+}
+
+/// True for lights delta in position or direction.
+#[inline]
+pub(crate) fn light_is_delta(scene: SceneRef<'_>, light: u32) -> bool {
+    scene.lights().is_delta(light)
+}
+
+/// The environment's light index, if the scene has one.
+#[inline]
+pub(crate) fn environment_index(scene: SceneRef<'_>) -> Option<u32> {
+    scene.lights().environment_index()
+}
+
+/// Radius of the scene's bounding sphere and the distance at which points stand in for
+/// "infinitely far" from `p` (outside the sphere).
+#[inline]
+pub(crate) fn far_distance(scene: SceneRef<'_>, p: Vec3A) -> f32 {
+    let (center, radius) = scene.lights().scene_sphere();
+    2.0 * radius + (p - center).length()
+}
+
+/// Area density `1 / (pi R^2)` of the disc infinite lights emit from.
+#[inline]
+pub(crate) fn infinite_disc_pdf(scene: SceneRef<'_>) -> f32 {
+    let (_, radius) = scene.lights().scene_sphere();
+    1.0 / (std::f32::consts::PI * radius * radius)
+}
+
+/// Density, selection included, of choosing an infinite light's emission direction `dir`
+/// (the direction light travels): the environment's sampling density of `-dir`; 0 for
+/// directional lights (delta in direction).
+#[inline]
+pub(crate) fn infinite_origin_pdf(scene: SceneRef<'_>, light: u32, dir: Vec3A) -> f32 {
+    if scene.lights().environment_index() == Some(light) {
+        scene.lights().pdf_environment(-dir)
+    } else {
+        0.0
+    }
+}
+
+/// Positional density (selection included) of a light subpath origin on a finite light
+/// `light`: `pmf / area` for area lights, `pmf` for point and spot lights.
+#[inline]
+pub(crate) fn light_pdf_pos(scene: SceneRef<'_>, light: u32) -> f32 {
     scene.lights().pdf_le(light, Vec3A::Z).0
 }
 
@@ -106,12 +150,14 @@ pub(crate) fn light_pdf_dir(scene: SceneRef<'_>, light: u32, dir: Vec3A) -> f32 
     scene.lights().pdf_le(light, dir).1
 }
 
-/// Radiance light `light` emits towards `dir`.
+/// Radiance an area light emits at `uv` towards `dir`.
 #[inline]
-pub(crate) fn light_le(scene: SceneRef<'_>, light: u32, dir: Vec3A) -> Vec3 {
-    scene
-        .lights()
-        .lights()
-        .get(light as usize)
-        .map_or(Vec3::ZERO, |l| l.le(dir))
+pub(crate) fn area_le(scene: SceneRef<'_>, light: u32, uv: Vec2, dir: Vec3A) -> Vec3 {
+    scene.area_le(light, uv, dir)
+}
+
+/// Radiance arriving from the environment along `wi` (towards the environment).
+#[inline]
+pub(crate) fn environment_le(scene: SceneRef<'_>, wi: Vec3A) -> Vec3 {
+    scene.lights().environment_le(wi)
 }

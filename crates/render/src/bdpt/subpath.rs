@@ -49,7 +49,31 @@ pub fn random_walk<S: Sampler + ?Sized>(
     }
     let mut pdf_fwd = pdf_dir;
     let mut added = 0;
-    while let Some(hit) = scene_api::intersect(scene, &ray) {
+    loop {
+        let Some(hit) = scene_api::intersect(scene, &ray) else {
+            // A camera ray leaving the scene ends on the environment: a light endpoint at
+            // infinity (pbrt-v3 `RandomWalk`), whose density stays in solid angle.
+            if mode == TransportMode::Radiance {
+                if let Some(env) = scene_api::environment_index(scene) {
+                    let idx = origin + 1 + added;
+                    let far = scene_api::far_distance(scene, ray.origin);
+                    let mut v = Vertex::light(
+                        ray.origin + ray.dir * far,
+                        Vec3A::ZERO,
+                        env,
+                        beta,
+                        0.0,
+                        ray.time,
+                    );
+                    v.infinite = true;
+                    v.wo = -ray.dir;
+                    v.pdf_fwd = path[idx - 1].convert_density(pdf_fwd, &v);
+                    path[idx] = v;
+                    added += 1;
+                }
+            }
+            break;
+        };
         let idx = origin + 1 + added;
         let prev = path[idx - 1];
         let mut v = Vertex {
@@ -61,6 +85,9 @@ pub fn random_walk<S: Sampler + ?Sized>(
             wo: -ray.dir,
             bsdf: Some(hit.bsdf),
             light: hit.light,
+            uv: hit.uv,
+            infinite: false,
+            delta_light: false,
             beta,
             pdf_fwd: 0.0,
             pdf_rev: 0.0,
@@ -184,19 +211,28 @@ pub fn light_subpath<S: Sampler + ?Sized>(
     let u_light = sampler.next_1d();
     let u_pos = sampler.next_2d();
     let u_dir = sampler.next_2d();
-    let Some(le) = scene.lights().sample_le(u_light, u_pos, u_dir) else {
+    let Some(le) = scene_api::sample_le(scene, u_light, u_pos, u_dir) else {
         return 0;
     };
     if le.pdf_pos <= 0.0 || le.pdf_dir <= 0.0 || le.radiance == Vec3::ZERO {
         return 0;
     }
-    let front = scene.lights().lights()[le.light as usize].normal;
-    path[0] = Vertex::light(le.p, front, le.light, le.radiance, le.pdf_pos, time);
-    let cos = le.n.dot(le.dir).abs();
-    let beta = le.radiance * (cos / (le.pdf_pos * le.pdf_dir));
+    let infinite = scene_api::light_is_infinite(scene, le.light);
+    // Area lights keep their front normal (offsets, cosines); other lights have none.
+    let n = if le.n == Vec3A::ZERO {
+        Vec3A::ZERO
+    } else {
+        scene.lights().lights()[le.light as usize].normal
+    };
+    let mut v = Vertex::light(le.p, n, le.light, le.radiance, le.pdf_pos, time);
+    v.uv = le.uv;
+    v.infinite = infinite;
+    v.delta_light = scene_api::light_is_delta(scene, le.light);
+    path[0] = v;
+    let beta = le.radiance * (le.cos / (le.pdf_pos * le.pdf_dir));
     let pdf_dir = le.pdf_dir;
     let ray = path[0].spawn_ray(le.dir);
-    1 + random_walk(
+    let added = random_walk(
         scene,
         ray,
         sampler,
@@ -207,5 +243,18 @@ pub fn light_subpath<S: Sampler + ?Sized>(
         roulette,
         path,
         0,
-    )
+    );
+    if infinite {
+        // pbrt-v3 `GenerateLightSubpath`: the first hit's density is the disc's area density
+        // projected onto the surface; the origin's is the density of the direction.
+        if added > 0 {
+            let mut pdf = scene_api::infinite_disc_pdf(scene);
+            if path[1].on_surface() {
+                pdf *= le.dir.dot(path[1].ng).abs();
+            }
+            path[1].pdf_fwd = pdf;
+        }
+        path[0].pdf_fwd = scene_api::infinite_origin_pdf(scene, le.light, le.dir);
+    }
+    1 + added
 }

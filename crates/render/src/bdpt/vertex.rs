@@ -1,7 +1,7 @@
 //! Path vertices of bidirectional path tracing and the densities MIS needs (Veach 1997,
 //! chapter 10; pbrt-v3 section 16.3).
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A};
 
 use super::scene_api::{self, SceneRef};
 use crate::camera::Ray;
@@ -16,7 +16,9 @@ pub const MAX_VERTICES: usize = 64;
 pub enum VertexKind {
     /// The camera (lens) endpoint.
     Camera,
-    /// A point sampled on an emitter as the light subpath's origin.
+    /// A light endpoint: a point sampled on an emitter (or at a punctual light) as the light
+    /// subpath's origin, a light sampled for a connection, or the point at infinity a camera
+    /// ray escaped to (environment).
     Light,
     /// A scattering point on a surface (possibly on an emitter).
     Surface,
@@ -39,8 +41,15 @@ pub struct Vertex {
     pub wo: Vec3A,
     /// The BSDF at a surface vertex.
     pub bsdf: Option<Bsdf>,
-    /// Emitter id if the point lies on an emitter.
+    /// Emitter id if the point lies on an emitter (or is a light endpoint).
     pub light: Option<u32>,
+    /// Texture coordinates (emissive textures of area lights).
+    pub uv: Vec2,
+    /// A light endpoint at infinity (environment, directional light): `p` stands `2 R` away
+    /// and densities towards it stay in solid angle (pbrt-v3 `IsInfiniteLight`).
+    pub infinite: bool,
+    /// A light endpoint of a delta light (point, spot, directional; pbrt-v3 `IsDeltaLight`).
+    pub delta_light: bool,
     /// Subpath throughput up to and including this vertex (divided by its pdf).
     pub beta: Vec3,
     /// Area density of sampling this vertex from its predecessor (forward).
@@ -65,6 +74,9 @@ impl Vertex {
             wo: Vec3A::ZERO,
             bsdf: None,
             light: None,
+            uv: Vec2::ZERO,
+            infinite: false,
+            delta_light: false,
             beta,
             pdf_fwd: 0.0,
             pdf_rev: 0.0,
@@ -73,17 +85,21 @@ impl Vertex {
         }
     }
 
-    /// A light vertex.
+    /// A light vertex at `p` with geometric normal `n` (zero for lights not on a surface:
+    /// punctual and infinite lights).
     pub fn light(p: Vec3A, n: Vec3A, light: u32, beta: Vec3, pdf_fwd: f32, time: f32) -> Self {
         Self {
             kind: VertexKind::Light,
             p,
             p_error: p.abs() * 1e-6,
             ng: n,
-            frame: Frame::from_normal(n),
+            frame: Frame::from_normal(if n == Vec3A::ZERO { Vec3A::Z } else { n }),
             wo: Vec3A::ZERO,
             bsdf: None,
             light: Some(light),
+            uv: Vec2::ZERO,
+            infinite: false,
+            delta_light: false,
             beta,
             pdf_fwd,
             pdf_rev: 0.0,
@@ -117,10 +133,11 @@ impl Vertex {
         }
     }
 
-    /// True for surface vertices (the only ones with a normal that converts densities).
+    /// True for surface vertices (the only ones with a normal that converts densities):
+    /// not the camera, nor punctual or infinite light endpoints.
     #[inline]
     pub fn on_surface(&self) -> bool {
-        self.kind != VertexKind::Camera
+        self.kind != VertexKind::Camera && self.ng != Vec3A::ZERO
     }
 
     /// Shading normal.
@@ -133,7 +150,9 @@ impl Vertex {
     #[inline]
     pub fn is_connectible(&self) -> bool {
         match self.kind {
-            VertexKind::Camera | VertexKind::Light => true,
+            VertexKind::Camera => true,
+            // Directional lights are delta in direction: nothing connects to them.
+            VertexKind::Light => !(self.infinite && self.delta_light),
             VertexKind::Surface => self.bsdf.is_some_and(|b| !b.is_specular()),
         }
     }
@@ -158,8 +177,13 @@ impl Vertex {
     #[inline]
     pub fn emitted_towards(&self, scene: SceneRef<'_>, towards: Vec3A) -> Vec3 {
         match self.light {
-            Some(l) => scene_api::light_le(scene, l, (towards - self.p).normalize_or_zero()),
-            None => Vec3::ZERO,
+            Some(_) if self.infinite && !self.delta_light => {
+                scene_api::environment_le(scene, (self.p - towards).normalize_or_zero())
+            }
+            Some(l) if !self.delta_light => {
+                scene_api::area_le(scene, l, self.uv, (towards - self.p).normalize_or_zero())
+            }
+            _ => Vec3::ZERO,
         }
     }
 
@@ -167,6 +191,9 @@ impl Vertex {
     /// `next` (pbrt-v3 `Vertex::ConvertDensity`).
     #[inline]
     pub fn convert_density(&self, pdf: f32, next: &Vertex) -> f32 {
+        if next.infinite {
+            return pdf;
+        }
         let w = next.p - self.p;
         let d2 = w.length_squared();
         if d2 == 0.0 {
@@ -215,8 +242,10 @@ impl Vertex {
         self.convert_density(pdf, next)
     }
 
-    /// Area density at `next` of emitting from this emitter point towards it: the light's
-    /// cosine-weighted emission density (pbrt-v3 `Vertex::PdfLight` for area lights).
+    /// Area density at `next` of emitting from this light endpoint towards it, selection
+    /// excluded (pbrt-v3 `Vertex::PdfLight`): the light's directional density over `d^2`
+    /// times the cosine at `next`; for infinite lights the density `1 / (pi R^2)` of the
+    /// emission disc times the cosine at `next`.
     pub fn pdf_light(&self, scene: SceneRef<'_>, next: &Vertex) -> f32 {
         let Some(light) = self.light else { return 0.0 };
         let w = next.p - self.p;
@@ -225,18 +254,29 @@ impl Vertex {
             return 0.0;
         }
         let w = w / d2.sqrt();
-        let mut pdf = scene_api::light_pdf_dir(scene, light, w) / d2;
+        let mut pdf = if self.infinite {
+            scene_api::infinite_disc_pdf(scene)
+        } else {
+            scene_api::light_pdf_dir(scene, light, w) / d2
+        };
         if next.on_surface() {
             pdf *= next.ng.dot(w).abs();
         }
         pdf
     }
 
-    /// Area density of sampling this emitter point as a light-subpath origin: light
-    /// selection probability times the uniform area density (pbrt-v3 `PdfLightOrigin`).
-    pub fn pdf_light_origin(&self, scene: SceneRef<'_>) -> f32 {
-        self.light
-            .map_or(0.0, |l| scene_api::light_pdf_area(scene, l))
+    /// Density of sampling this light endpoint as a light-subpath origin emitting towards
+    /// `next` (pbrt-v3 `PdfLightOrigin`): selection probability times the area density for
+    /// area lights (times 1 for point and spot lights); for infinite lights the density of
+    /// the emission direction (`InfiniteLightDensity`).
+    pub fn pdf_light_origin(&self, scene: SceneRef<'_>, next: &Vertex) -> f32 {
+        let Some(light) = self.light else { return 0.0 };
+        if self.infinite {
+            let dir = (next.p - self.p).normalize_or_zero();
+            scene_api::infinite_origin_pdf(scene, light, dir)
+        } else {
+            scene_api::light_pdf_pos(scene, light)
+        }
     }
 }
 

@@ -1,5 +1,6 @@
 //! Unidirectional path tracing with next-event estimation and MIS (power heuristic) between
-//! light sampling and BSDF sampling, Russian roulette and a maximum depth (pbrt-v4's
+//! light sampling and BSDF sampling (area and environment lights; delta lights — point, spot,
+//! directional — by light sampling only), Russian roulette and a maximum depth (pbrt-v4's
 //! `PathIntegrator`, Pharr et al. 2023, section 13.4).
 //!
 //! Random numbers: after the camera numbers (pixel position 2, lens 2, time 1 — see
@@ -39,7 +40,21 @@ pub fn li<S: Sampler + ?Sized>(scene: &Scene, ray: Ray, sampler: &mut S, max_dep
     let mut eta_scale = 1.0f32;
     let mut depth = 0u32;
     sampler.start_stream(Stream::Camera);
-    while let Some(si) = scene.intersect(&ray) {
+    loop {
+        let Some(si) = scene.intersect(&ray) else {
+            // The ray leaves the scene: the environment, MIS-weighted against its sampling
+            // by next-event estimation.
+            let le = lights.environment_le(ray.dir);
+            if le != Vec3::ZERO {
+                if depth == 0 || specular_bounce {
+                    l += beta * le;
+                } else {
+                    let light_pdf = lights.pdf_environment(ray.dir);
+                    l += beta * le * power_heuristic(prev_bsdf_pdf, light_pdf);
+                }
+            }
+            break;
+        };
         let le = scene.emitted(&si, si.wo);
         if le != Vec3::ZERO {
             if depth == 0 || specular_bounce {
@@ -66,13 +81,24 @@ pub fn li<S: Sampler + ?Sized>(scene: &Scene, ray: Ray, sampler: &mut S, max_dep
             break;
         }
         if !bsdf.is_specular() {
-            if let Some(ls) = lights.sample_li(si.p, u_light, u_light_pos) {
+            if let Some(ls) = scene.sample_li(si.p, u_light, u_light_pos) {
                 if ls.radiance != Vec3::ZERO {
                     let wi = frame.to_local(ls.wi);
                     let f = bsdf.eval(wo, wi, TransportMode::Radiance) * wi.z.abs();
-                    if f != Vec3::ZERO && scene.unoccluded(&si, ls.p) {
-                        let bsdf_pdf = bsdf.pdf(wo, wi, TransportMode::Radiance);
-                        let w = power_heuristic(ls.pdf, bsdf_pdf);
+                    let visible = || {
+                        if ls.infinite {
+                            scene.unoccluded_towards(&si, ls.wi)
+                        } else {
+                            scene.unoccluded(&si, ls.p)
+                        }
+                    };
+                    if f != Vec3::ZERO && visible() {
+                        // Delta lights cannot be hit by BSDF sampling: no MIS.
+                        let w = if ls.delta {
+                            1.0
+                        } else {
+                            power_heuristic(ls.pdf, bsdf.pdf(wo, wi, TransportMode::Radiance))
+                        };
                         l += beta * f * ls.radiance * (w / ls.pdf);
                     }
                 }

@@ -14,7 +14,6 @@ use mcmc_core::stats::AcceptanceStats;
 use mcmc_core::{Kernel, NoAdaptation, Progress, Target};
 use pss::{FreshPss, PssState};
 
-use crate::film::{Film, Filter};
 use crate::image::Image;
 
 /// How the large-step probability is chosen.
@@ -84,7 +83,8 @@ pub struct MltOutput {
     pub large_step: Option<LargeStepEstimate>,
     /// The large-step probability used after the estimation phase.
     pub final_large_step_probability: f64,
-    /// Splats dropped (non-finite or outside the image).
+    /// Splats dropped (non-finite, outside the image, or overflowing a pixel's sum) plus
+    /// pixels dropped because their value does not fit a finite f32.
     pub dropped: u64,
     /// Non-finite target values met by chains (rejected candidates).
     pub non_finite: u64,
@@ -208,11 +208,19 @@ fn finish<Sh>(
     let scale = out.splat_scale * (w * h) as f64;
     let mut notes = out.notes;
     let message = if out.found_nothing { notes.pop() } else { None };
+    // The splat sums are finite f64; a pixel above f32::MAX would still become infinite in
+    // the f32 image: such pixels are dropped (black) and counted, never written as inf.
+    let (pixels, overflowed) = out.sink.to_rgb32_checked(scale);
+    if overflowed > 0 {
+        notes.push(format!(
+            "{overflowed} pixel(s) exceed the largest f32 value (3.4e38) and were dropped (black): the scene's radiance is too large to store; scale its emission down"
+        ));
+    }
     MltOutput {
-        image: {
-            let mut film = Film::new(w, h, Filter::BOX);
-            film.merge_splats(&out.sink);
-            film.image(scale)
+        image: Image {
+            width: w,
+            height: h,
+            pixels,
         },
         b: out.b,
         b_standard_error: out.b_standard_error,
@@ -221,7 +229,7 @@ fn finish<Sh>(
         stats: out.stats,
         final_large_step_probability: large_step.map_or(initial_p, |e| e.large_step_probability),
         large_step,
-        dropped: out.dropped_splats,
+        dropped: out.dropped_splats + overflowed,
         non_finite: out.non_finite,
         cancelled: out.cancelled,
         message,

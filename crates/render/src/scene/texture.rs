@@ -1,5 +1,7 @@
-//! Base-colour textures: linear RGB texels with glTF wrap modes, sampled bilinearly (or with
-//! nearest-texel lookup when the glTF sampler asks for `NEAREST` magnification).
+//! Material textures: linear RGB texels (decoded from sRGB for colour textures, kept as stored
+//! for data textures such as metallic-roughness and normal maps) with an optional alpha
+//! channel, glTF wrap modes, sampled bilinearly (or with nearest-texel lookup when the glTF
+//! sampler asks for `NEAREST` magnification).
 
 use glam::{Vec2, Vec3};
 
@@ -25,12 +27,15 @@ pub enum TextureFilter {
     Nearest,
 }
 
-/// A linear RGB texture. glTF UV `(0, 0)` is the top-left corner of the image.
+/// A linear RGB texture with an optional alpha channel. glTF UV `(0, 0)` is the top-left
+/// corner of the image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     width: usize,
     height: usize,
     texels: Vec<Vec3>,
+    /// Per-texel alpha (linear, in `[0, 1]`), or empty: opaque everywhere.
+    alpha: Vec<f32>,
     /// Wrap mode along u.
     pub wrap_s: WrapMode,
     /// Wrap mode along v.
@@ -60,6 +65,7 @@ impl Texture {
                 width,
                 height,
                 texels,
+                alpha: Vec::new(),
                 wrap_s: WrapMode::Repeat,
                 wrap_t: WrapMode::Repeat,
                 filter: TextureFilter::Bilinear,
@@ -82,6 +88,63 @@ impl Texture {
             .map(|c| Vec3::new(lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]))
             .collect();
         Self::new(width, height, texels)
+    }
+
+    /// A texture from 8-bit RGBA quadruples: RGB sRGB-encoded if `srgb` (colour textures) or
+    /// linear otherwise (data textures: metallic-roughness, normal maps); alpha is always
+    /// linear (glTF). The alpha channel is kept only if `keep_alpha` and some texel is not
+    /// fully opaque.
+    #[must_use]
+    pub fn from_rgba8(
+        width: usize,
+        height: usize,
+        rgba: &[u8],
+        srgb: bool,
+        keep_alpha: bool,
+    ) -> Option<Self> {
+        if width.checked_mul(height)?.checked_mul(4)? != rgba.len() {
+            return None;
+        }
+        let mut lut = [0.0f32; 256];
+        for (i, l) in lut.iter_mut().enumerate() {
+            *l = if srgb {
+                srgb_to_linear(i as u8)
+            } else {
+                i as f32 / 255.0
+            };
+        }
+        let texels = rgba
+            .chunks_exact(4)
+            .map(|c| Vec3::new(lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]))
+            .collect();
+        let mut t = Self::new(width, height, texels)?;
+        if keep_alpha && rgba.chunks_exact(4).any(|c| c[3] != 255) {
+            t.alpha = rgba
+                .chunks_exact(4)
+                .map(|c| f32::from(c[3]) / 255.0)
+                .collect();
+        }
+        Some(t)
+    }
+
+    /// The texture with per-texel alpha `alpha` (row-major, top row first; values are clamped
+    /// to `[0, 1]`, NaN reads as 1), or `None` if the length does not match the texel count.
+    #[must_use]
+    pub fn with_alpha(mut self, alpha: Vec<f32>) -> Option<Self> {
+        if alpha.len() != self.texels.len() {
+            return None;
+        }
+        self.alpha = alpha
+            .into_iter()
+            .map(|a| if a.is_nan() { 1.0 } else { a.clamp(0.0, 1.0) })
+            .collect();
+        Some(self)
+    }
+
+    /// True if the texture has an alpha channel (otherwise [`Texture::sample_alpha`] is 1).
+    #[must_use]
+    pub fn has_alpha(&self) -> bool {
+        !self.alpha.is_empty()
     }
 
     /// Width in texels.
@@ -114,16 +177,38 @@ impl Texture {
         j as usize
     }
 
+    /// The index of texel `(x, y)` after wrapping.
     #[inline]
-    fn texel(&self, x: i64, y: i64) -> Vec3 {
+    fn index(&self, x: i64, y: i64) -> usize {
         let x = Self::wrap(x, self.width, self.wrap_s);
         let y = Self::wrap(y, self.height, self.wrap_t);
-        self.texels[y * self.width + x]
+        y * self.width + x
     }
 
     /// The texture value at `uv` (non-finite coordinates read texel `(0, 0)`).
     #[must_use]
     pub fn sample(&self, uv: Vec2) -> Vec3 {
+        self.filtered(uv, |i| self.texels[i], Vec3::lerp)
+    }
+
+    /// The alpha at `uv`, filtered like [`Texture::sample`]; 1 without an alpha channel.
+    #[must_use]
+    pub fn sample_alpha(&self, uv: Vec2) -> f32 {
+        if self.alpha.is_empty() {
+            return 1.0;
+        }
+        self.filtered(uv, |i| self.alpha[i], |a, b, t| a + (b - a) * t)
+    }
+
+    /// Reconstructs the texel values `fetch(index)` at `uv` with the texture's filter and
+    /// wrap modes.
+    #[inline]
+    fn filtered<T: Copy>(
+        &self,
+        uv: Vec2,
+        fetch: impl Fn(usize) -> T,
+        lerp: impl Fn(T, T, f32) -> T,
+    ) -> T {
         let uv = if uv.is_finite() { uv } else { Vec2::ZERO };
         // Keep the coordinates in a range where f32 -> i64 is exact enough: repeat modes are
         // periodic, so reducing by whole periods of 2 changes nothing.
@@ -136,16 +221,17 @@ impl Texture {
         };
         let x = reduce(uv.x) * self.width as f32;
         let y = reduce(uv.y) * self.height as f32;
+        let at = |x: i64, y: i64| fetch(self.index(x, y));
         match self.filter {
-            TextureFilter::Nearest => self.texel(x.floor() as i64, y.floor() as i64),
+            TextureFilter::Nearest => at(x.floor() as i64, y.floor() as i64),
             TextureFilter::Bilinear => {
                 let (x, y) = (x - 0.5, y - 0.5);
                 let (x0, y0) = (x.floor(), y.floor());
                 let (fx, fy) = (x - x0, y - y0);
                 let (x0, y0) = (x0 as i64, y0 as i64);
-                let a = self.texel(x0, y0).lerp(self.texel(x0 + 1, y0), fx);
-                let b = self.texel(x0, y0 + 1).lerp(self.texel(x0 + 1, y0 + 1), fx);
-                a.lerp(b, fy)
+                let a = lerp(at(x0, y0), at(x0 + 1, y0), fx);
+                let b = lerp(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx);
+                lerp(a, b, fy)
             }
         }
     }
@@ -200,5 +286,33 @@ mod tests {
         assert!((v.z - 0.5).abs() < 0.01, "{}", v.z);
         assert!(Texture::from_srgb8(2, 1, &[0; 3]).is_none());
         assert!(Texture::new(0, 1, vec![]).is_none());
+    }
+
+    #[test]
+    fn rgba_linear_and_alpha() {
+        // Linear data: 188 stays 188/255 (sRGB decoding would give about 0.5).
+        let t = Texture::from_rgba8(1, 1, &[255, 0, 188, 255], false, true).unwrap();
+        assert!((t.sample(Vec2::ZERO).z - 188.0 / 255.0).abs() < 1e-6);
+        assert!(!t.has_alpha(), "an opaque image keeps no alpha channel");
+        assert_eq!(t.sample_alpha(Vec2::ZERO), 1.0);
+        let s = Texture::from_rgba8(1, 1, &[255, 0, 188, 255], true, true).unwrap();
+        assert!((s.sample(Vec2::ZERO).z - 0.5).abs() < 0.01);
+        // Two texels, left transparent, right opaque.
+        let mut a = Texture::from_rgba8(2, 1, &[9, 9, 9, 0, 9, 9, 9, 255], true, true).unwrap();
+        a.filter = TextureFilter::Nearest;
+        assert!(a.has_alpha());
+        assert_eq!(a.sample_alpha(Vec2::new(0.25, 0.5)), 0.0);
+        assert_eq!(a.sample_alpha(Vec2::new(0.75, 0.5)), 1.0);
+        a.filter = TextureFilter::Bilinear;
+        a.wrap_s = WrapMode::ClampToEdge;
+        assert!((a.sample_alpha(Vec2::new(0.5, 0.5)) - 0.5).abs() < 1e-6);
+        let no = Texture::from_rgba8(2, 1, &[9, 9, 9, 0, 9, 9, 9, 255], true, false).unwrap();
+        assert!(!no.has_alpha());
+        assert!(Texture::from_rgba8(2, 1, &[0; 4], true, true).is_none());
+        let w = checker()
+            .with_alpha(vec![f32::NAN, 2.0, -1.0, 0.5])
+            .unwrap();
+        assert!(w.has_alpha());
+        assert!(checker().with_alpha(vec![1.0]).is_none());
     }
 }
