@@ -26,7 +26,8 @@ enum UriLimit {
 }
 
 /// Extensions whose content the loader uses.
-const SUPPORTED_EXTENSIONS: [&str; 4] = [
+const SUPPORTED_EXTENSIONS: [&str; 5] = [
+    "KHR_lights_punctual",
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
@@ -451,7 +452,14 @@ impl Loader<'_> {
         let mut camera: Option<(CameraSpec, f32)> = None;
         let mut mesh_cache: HashMap<usize, Mesh> = HashMap::new();
         let nodes: Vec<gltf::Node<'_>> = doc.nodes().collect();
+        let mut punctual = Vec::new();
         for (node_index, world) in self.node_world_transforms(&doc, &nodes)? {
+            punctual.extend(super::gltf_lights::node_light(
+                &raw,
+                node_index,
+                world,
+                &mut self.warnings,
+            ));
             let node = nodes
                 .get(node_index)
                 .ok_or_else(|| self.err(format!("nodes[{node_index}] does not exist")))?;
@@ -496,6 +504,9 @@ impl Loader<'_> {
         };
         let height = ((DEFAULT_WIDTH as f32 / aspect).round() as u32).clamp(1, 8 * DEFAULT_WIDTH);
         let mut scene = Scene::new(mesh, materials, textures, camera, DEFAULT_WIDTH, height);
+        if !punctual.is_empty() {
+            scene.add_punctual_lights(punctual);
+        }
         let mut warnings = self.warnings;
         warnings.append(&mut scene.warnings);
         scene.warnings = warnings;

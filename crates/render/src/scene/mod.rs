@@ -11,6 +11,7 @@
 //! ```
 
 mod builtin;
+mod gltf_lights;
 mod gltf_load;
 mod load_options;
 /// Triangle meshes: a leaf module (the BVH and the lights use it), re-exported here.
