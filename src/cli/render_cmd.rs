@@ -101,7 +101,7 @@ pub(crate) struct RenderArgs {
     /// Environment light: `none`, a radiance `R,G,B` or grey `V` (each in 0..=1e6), or an
     /// equirectangular map (.exr, .hdr, .pfm; +Y up, image centre towards -Z) [default: the
     /// scene's lights; a scene without any light gets a uniform environment of radiance 1].
-    #[arg(long, value_name = "none|R,G,B|FILE", value_parser = parse::environment)]
+    #[arg(long, allow_negative_numbers = true, value_name = "none|R,G,B|FILE", value_parser = parse::environment)]
     env: Option<parse::EnvArg>,
     /// Rotation of the environment about +Y in degrees, -360..=360.
     #[arg(long, allow_negative_numbers = true, value_name = "DEG", default_value = "0", requires = "env", value_parser = parse::env_rotation)]
