@@ -372,8 +372,7 @@ pub struct SurfaceInteraction {
     pub ng: Vec3A,
     /// Unit shading normal: the interpolated vertex normals (`ng` when the mesh has none) in
     /// the hemisphere of `ng`, perturbed by the material's normal map if it has one (then kept
-    /// at least [`MIN_SHADING_COS`] inside the hemisphere of `ng` and on the side of `wo`
-    /// that `ng` is on).
+    /// at least [`MIN_SHADING_COS`] inside the hemisphere of `ng`).
     pub ns: Vec3A,
     /// Interpolated texture coordinates (`TEXCOORD_0`; see [`Scene::tex_coord`] for set 1).
     pub uv: Vec2,
@@ -448,32 +447,24 @@ enum EnvironmentChoice {
 /// whose error bound is unknown).
 const SHADOW_EPSILON: f32 = 1e-4;
 
-/// The smallest cosine a normal-mapped shading normal keeps with the geometric normal and
-/// with the direction towards the viewer (see [`valid_shading_normal`]).
+/// The smallest cosine a normal-mapped shading normal keeps with the geometric normal: a
+/// normal map tilting it further is pulled back towards the geometric normal.
 pub const MIN_SHADING_COS: f32 = 0.01;
 
-/// Keeps a perturbed unit shading normal `n` usable: first pushed (towards `ng`) back to at
-/// least [`MIN_SHADING_COS`] inside the hemisphere of the geometric normal `ng`, then (towards
-/// `wo`, mirrored to the side of `ng`) so that `wo` is at least that far above the shading
-/// surface on the same side as it is of the geometric surface: a view direction is never
-/// below the shading hemisphere it sees (which would make the surface black). Both pushes add
-/// a multiple of a vector in the hemisphere of `ng`, so the second keeps the first. `None`
-/// if the result is not finite.
+/// Keeps a perturbed unit shading normal `n` usable: pushed (towards `ng`) back to at least
+/// [`MIN_SHADING_COS`] inside the hemisphere of the geometric normal `ng`. The result depends
+/// on the surface point only, not on the direction it is seen from, so every integrator and
+/// every strategy of a bidirectional one sees the same shading frame at a point. (A view
+/// direction below a strongly tilted shading horizon then sees a dark surface, as in pbrt.)
+/// `None` if the result is not finite.
 #[inline]
-fn valid_shading_normal(n: Vec3A, ng: Vec3A, wo: Vec3A) -> Option<Vec3A> {
-    let mut n = n;
+fn valid_shading_normal(n: Vec3A, ng: Vec3A) -> Option<Vec3A> {
     let d = n.dot(ng);
-    if d < MIN_SHADING_COS {
-        n = (n + ng * (MIN_SHADING_COS - d)).try_normalize()?;
-    }
-    let side = wo.dot(ng);
-    if side != 0.0 {
-        let w = if side > 0.0 { wo } else { -wo };
-        let e = w.dot(n);
-        if e < MIN_SHADING_COS {
-            n = (n + w * (MIN_SHADING_COS - e)).try_normalize()?;
-        }
-    }
+    let n = if d < MIN_SHADING_COS {
+        (n + ng * (MIN_SHADING_COS - d)).try_normalize()?
+    } else {
+        n
+    };
     n.is_finite().then_some(n)
 }
 
@@ -802,10 +793,9 @@ impl Scene {
         };
         let uv = self.mesh.uvs[i0] * b0 + self.mesh.uvs[i1] * b1 + self.mesh.uvs[i2] * b2;
         let material = self.mesh.material_ids[tri];
-        let wo = -ray.dir;
         let ns = if self.has_normal_maps {
             match &self.materials[material as usize].normal_texture {
-                Some(map) => self.normal_mapped(map, material, tri, hit.barycentrics, ng, ns, wo),
+                Some(map) => self.normal_mapped(map, material, tri, hit.barycentrics, ng, ns),
                 None => ns,
             }
         } else {
@@ -821,7 +811,7 @@ impl Scene {
             barycentrics: hit.barycentrics,
             triangle: hit.triangle,
             material,
-            wo,
+            wo: -ray.dir,
         })
     }
 
@@ -855,7 +845,6 @@ impl Scene {
         b: Vec2,
         ng: Vec3A,
         ns: Vec3A,
-        wo: Vec3A,
     ) -> Vec3A {
         let Some(texture) = self.textures.get(map.texture as usize) else {
             return ns;
@@ -871,7 +860,7 @@ impl Scene {
             return ns;
         };
         match (t * local.x + bt * local.y + ns * local.z).try_normalize() {
-            Some(n) => valid_shading_normal(n, ng, wo).unwrap_or(ns),
+            Some(n) => valid_shading_normal(n, ng).unwrap_or(ns),
             None => ns,
         }
     }
@@ -1286,40 +1275,29 @@ mod tests {
         assert!(m.is_opaque_at(0.0));
     }
 
-    /// Perturbed normals far outside the geometric hemisphere, or facing away from the
-    /// viewer, are pulled back; the result is unit and finite.
+    /// Perturbed normals far outside the geometric hemisphere are pulled back into it; the
+    /// result is unit and finite, and normals inside it are unchanged.
     #[test]
     fn shading_normals_stay_valid() {
         use crate::sampler::{IndependentSampler, Sampler};
-        let ng = Vec3A::Z;
+        let ng = Vec3A::new(0.3, -0.4, 0.5).normalize();
         let mut s = IndependentSampler::new(9);
-        let sphere = |u: Vec2| {
+        for i in 0..20_000 {
+            s.start_pixel_sample(i, 0);
+            let u = s.next_2d();
             let z = 1.0 - 2.0 * u.x;
             let r = (1.0 - z * z).max(0.0).sqrt();
             let phi = std::f32::consts::TAU * u.y;
-            Vec3A::new(r * phi.cos(), r * phi.sin(), z)
-        };
-        for i in 0..20_000 {
-            s.start_pixel_sample(i, 0);
-            let n = sphere(s.next_2d());
-            let wo = sphere(s.next_2d());
-            let Some(m) = valid_shading_normal(n, ng, wo) else {
-                panic!("{n} {wo}");
-            };
+            let n = Vec3A::new(r * phi.cos(), r * phi.sin(), z);
+            let m = valid_shading_normal(n, ng).unwrap_or_else(|| panic!("{n}"));
             assert!((m.length() - 1.0).abs() < 1e-4);
-            assert!(m.dot(ng) > 0.5 * MIN_SHADING_COS, "{n} {wo} -> {m}");
-            let side = wo.dot(ng);
-            if side != 0.0 {
-                assert!(
-                    m.dot(wo) * side.signum() > 0.5 * MIN_SHADING_COS,
-                    "{n} {wo} -> {m}"
-                );
+            assert!(m.dot(ng) > 0.5 * MIN_SHADING_COS, "{n} -> {m}");
+            if n.dot(ng) >= MIN_SHADING_COS {
+                assert_eq!(m, n);
             }
         }
-        // Exactly opposite the geometric normal, and a grazing view.
-        assert!(valid_shading_normal(-ng, ng, Vec3A::X).is_some());
-        let n = Vec3A::new(0.6, 0.0, 0.8);
-        assert_eq!(valid_shading_normal(n, ng, Vec3A::Z), Some(n));
+        // Exactly opposite the geometric normal.
+        assert!(valid_shading_normal(-ng, ng).is_some());
     }
 
     #[test]
