@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3, Vec3A};
 
 use super::scene_api::{self, SceneRef};
-use super::vertex::{Vertex, VertexKind};
+use super::vertex::{shading_normal_correction, Vertex, VertexKind};
 use crate::camera::Ray;
 use crate::frame::Frame;
 use crate::material::TransportMode;
@@ -142,16 +142,6 @@ pub fn random_walk<S: Sampler + ?Sized>(
     added
 }
 
-/// Veach's correction for shading normals in adjoint (importance) transport:
-/// `|wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)` (Veach 1997, eq. 5.19; pbrt-v3 section 16.1.3).
-#[inline]
-fn shading_normal_correction(wo: Vec3A, wi: Vec3A, ng: Vec3A, ns: Vec3A) -> f32 {
-    let denom = wo.dot(ng).abs() * wi.dot(ns).abs();
-    if denom == 0.0 {
-        return 0.0;
-    }
-    wo.dot(ns).abs() * wi.dot(ng).abs() / denom
-}
 
 /// Generates a camera subpath of at most `max_vertices` vertices (including the camera
 /// vertex) for the raster position `p_raster` into `path`; returns its length. Random numbers:

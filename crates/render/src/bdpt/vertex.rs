@@ -163,14 +163,23 @@ impl Vertex {
         self.light.is_some()
     }
 
-    /// BSDF value for light arriving from `next` and leaving towards `wo` (surfaces only).
+    /// BSDF value for light arriving from `next` and leaving towards `wo` (surfaces only). In
+    /// importance transport (light subpaths) it includes Veach's shading-normal correction,
+    /// as the random walk's throughput does (pbrt-v3 `Vertex::f` with `CorrectShadingNormal`):
+    /// without it, connections through a light-subpath vertex whose shading normal differs
+    /// from its geometric one (interpolated normals, normal maps) are biased.
     #[inline]
     pub fn f(&self, next: &Vertex, mode: TransportMode) -> Vec3 {
         let Some(bsdf) = self.bsdf else {
             return Vec3::ZERO;
         };
         let wi = (next.p - self.p).normalize_or_zero();
-        bsdf.eval(self.frame.to_local(self.wo), self.frame.to_local(wi), mode)
+        let f = bsdf.eval(self.frame.to_local(self.wo), self.frame.to_local(wi), mode);
+        if mode == TransportMode::Importance && f != Vec3::ZERO {
+            f * shading_normal_correction(self.wo, wi, self.ng, self.ns())
+        } else {
+            f
+        }
     }
 
     /// Emitted radiance leaving this point towards the point `towards`.
@@ -306,4 +315,15 @@ pub fn geometry_term(scene: SceneRef<'_>, v0: &Vertex, v1: &Vertex) -> f32 {
         return 0.0;
     }
     g
+}
+
+/// Veach's correction for shading normals in adjoint (importance) transport:
+/// `|wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)` (Veach 1997, eq. 5.19; pbrt-v3 section 16.1.3).
+#[inline]
+pub(crate) fn shading_normal_correction(wo: Vec3A, wi: Vec3A, ng: Vec3A, ns: Vec3A) -> f32 {
+    let denom = wo.dot(ng).abs() * wi.dot(ns).abs();
+    if denom == 0.0 {
+        return 0.0;
+    }
+    wo.dot(ns).abs() * wi.dot(ng).abs() / denom
 }
