@@ -533,3 +533,245 @@ fn mcmc_time_budget_includes_a_huge_bootstrap() {
         assert!(image.mean_luminance() > 0.0, "{integrator}: black image");
     }
 }
+
+/// Runs a tiny Cornell-box render writing `out`, expecting it to fail before rendering with
+/// every needle in stderr.
+fn assert_fails_before_rendering(out: &Path, needles: &[&str]) {
+    let args = [
+        "render",
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--spp",
+        "1",
+        "-o",
+        path_str(out),
+    ];
+    assert_fails_with(&args, needles);
+    let err = stderr(&chainlight(&args));
+    assert!(
+        !err.contains("rendering "),
+        "the render started before the output check failed:\n{err}"
+    );
+}
+
+#[test]
+fn unwritable_outputs_fail_before_rendering() {
+    let dir = temp_dir("unwritable");
+    // The output path is a directory.
+    let out = dir.join("out.exr");
+    std::fs::create_dir_all(&out).unwrap();
+    assert_fails_before_rendering(&out, &["--output", "out.exr", "is a directory"]);
+
+    // The PNG preview path is a directory; the EXR probe leaves nothing behind, and an
+    // existing EXR is not touched.
+    let exr = dir.join("pic.exr");
+    std::fs::create_dir_all(dir.join("pic.png")).unwrap();
+    assert_fails_before_rendering(&exr, &["PNG preview", "pic.png", "is a directory"]);
+    assert!(!exr.exists(), "the probe file was not removed");
+    std::fs::write(&exr, b"keep").unwrap();
+    assert_fails_before_rendering(&exr, &["PNG preview", "pic.png"]);
+    assert_eq!(std::fs::read(&exr).unwrap(), b"keep");
+
+    // A directory that exists but where nothing can be created (procfs, even for root).
+    #[cfg(target_os = "linux")]
+    assert_fails_before_rendering(
+        Path::new("/proc/chainlight-cli-test.exr"),
+        &[
+            "--output",
+            "/proc/chainlight-cli-test.exr",
+            "cannot be written",
+        ],
+    );
+
+    // A read-only directory (not read-only for root: then only the above applies).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let ro = dir.join("read-only");
+        std::fs::create_dir_all(&ro).unwrap();
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+        let can_write = std::fs::write(ro.join("probe"), b"").is_ok();
+        if can_write {
+            println!("read-only directory check skipped: running with permission override (root)");
+        } else {
+            assert_fails_before_rendering(
+                &ro.join("out.exr"),
+                &["--output", "cannot be written", "ermission denied"],
+            );
+        }
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+
+    // Control: a writable output renders, and the file is there afterwards.
+    let ok = dir.join("ok.exr");
+    let output = chainlight(&[
+        "render",
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--spp",
+        "1",
+        "-o",
+        path_str(&ok),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(ok.is_file() && dir.join("ok.png").is_file());
+}
+
+#[test]
+fn external_scene_files_need_the_flag() {
+    let dir = temp_dir("external");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/render/tests/data");
+    // The fixture with its buffer and image named by absolute paths outside `dir`.
+    let text = std::fs::read_to_string(data.join("tiny.gltf")).unwrap();
+    let mut edited = text.clone();
+    for name in ["tiny.bin", "checker.png"] {
+        let abs = path_str(&data.join(name)).to_owned();
+        edited = edited.replace(
+            &format!("\"uri\": \"{name}\""),
+            &format!("\"uri\": \"{abs}\""),
+        );
+    }
+    assert_eq!(edited.matches(path_str(&data)).count(), 2, "{edited}");
+    let scene = dir.join("scene.gltf");
+    std::fs::write(&scene, edited).unwrap();
+    let out = dir.join("out.exr");
+    let args = [
+        "render",
+        path_str(&scene),
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--spp",
+        "1",
+        "-o",
+        path_str(&out),
+    ];
+    assert_fails_with(
+        &args,
+        &[
+            "scene.gltf",
+            "buffers[0].uri",
+            "absolute path",
+            "--allow-external-files",
+        ],
+    );
+    let mut allowed = args.to_vec();
+    allowed.push("--allow-external-files");
+    let output = chainlight(&allowed);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(read_exr(&out).unwrap().width, 4);
+}
+
+/// Writes `dir/wall.gltf` (+ `wall.bin`): a 0.4 x 0.4 m emissive wall at z = 0 facing +z with
+/// `emissiveStrength` `strength`, filling the view of a camera at z = 0.5 looking down -z
+/// (small, so that its power, radiance x area x pi, stays finite in f32).
+fn emissive_wall(dir: &Path, strength: &str) -> PathBuf {
+    let mut bin = Vec::new();
+    for p in [
+        [-0.2f32, -0.2, 0.0],
+        [0.2, -0.2, 0.0],
+        [0.2, 0.2, 0.0],
+        [-0.2, 0.2, 0.0],
+    ] {
+        for c in p {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    std::fs::write(dir.join("wall.bin"), &bin).unwrap();
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}},
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "scenes": [{{"nodes": [0, 1]}}], "scene": 0,
+        "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 0, 0.5]}}],
+        "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.5, "znear": 0.01}}}}],
+        "materials": [{{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, 1]}},
+            "emissiveFactor": [1, 1, 1],
+            "extensions": {{"KHR_materials_emissive_strength": {{"emissiveStrength": {strength}}}}}}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}}],
+        "accessors": [
+            {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+              "min": [-0.2, -0.2, 0], "max": [0.2, 0.2, 0]}},
+            {{"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 48}},
+            {{"buffer": 0, "byteOffset": 48, "byteLength": 12}}],
+        "buffers": [{{"byteLength": 60, "uri": "wall.bin"}}]}}"#
+    );
+    let path = dir.join("wall.gltf");
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// Renders `scene` with PSSMLT at 8 x 8, 64 mutations per pixel (every pixel is visited); returns the image and the
+/// summary's non-finite count.
+fn pssmlt_render(scene: &Path, out: &Path) -> (Image, u64) {
+    let output = chainlight(&[
+        "render",
+        path_str(scene),
+        "--integrator",
+        "pssmlt",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "64",
+        "--chains",
+        "64",
+        "--bootstrap-samples",
+        "1000",
+        "-o",
+        path_str(out),
+    ]);
+    let err = stderr(&output);
+    assert!(output.status.success(), "{err}");
+    let summary = stdout(&output);
+    let dropped: u64 = summary
+        .lines()
+        .find_map(|l| l.strip_prefix("non-finite"))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no non-finite line in {summary}"));
+    (read_exr(out).unwrap(), dropped)
+}
+
+/// An emitter of radiance 3e38 (finite in f32) through PSSMLT: the f64 pixel estimates
+/// scatter around 3e38, and those above f32::MAX (3.4e38) would be inf in the f32 image.
+/// They are dropped (black) and counted in the summary (before: inf pixels and "non-finite 0
+/// samples dropped").
+#[test]
+fn huge_emission_through_pssmlt_gives_no_inf() {
+    let dir = temp_dir("huge-emission");
+    let (image, dropped) = pssmlt_render(&emissive_wall(&dir, "3e38"), &dir.join("hot.exr"));
+    assert!(
+        image.pixels.iter().flatten().all(|c| c.is_finite()),
+        "the EXR has non-finite pixels"
+    );
+    // Every pixel sees the wall: a black pixel is a dropped one, and each is counted.
+    let black = image.pixels.iter().filter(|p| **p == [0.0; 3]).count() as u64;
+    assert!(
+        black > 0,
+        "no pixel overflowed: the test does not test anything"
+    );
+    assert_eq!(dropped, black, "dropped pixels and the summary disagree");
+    assert!(image
+        .pixels
+        .iter()
+        .flatten()
+        .all(|c| *c == 0.0 || *c > 1e37));
+    // Control: the same wall at 1e30 has no drop and no black pixel.
+    let (image, dropped) = pssmlt_render(&emissive_wall(&dir, "1e30"), &dir.join("warm.exr"));
+    assert_eq!(dropped, 0);
+    assert!(image
+        .pixels
+        .iter()
+        .flatten()
+        .all(|c| *c > 1e29 && c.is_finite()));
+}

@@ -522,13 +522,12 @@ impl Loader<'_> {
         const DRACO: &str = "KHR_draco_mesh_compression";
         let convert = "only glTF 2.0 is supported (convert the file to glTF 2.0 first)";
         match &raw["asset"]["version"] {
-            gltf::json::Value::String(v) => {
-                if v.split('.').next() != Some("2") {
-                    return Err(self.err(format!(
-                        "asset.version is \"{v}\": glTF {v} is not supported; {convert}"
-                    )));
-                }
+            gltf::json::Value::String(v) if v.split('.').next() != Some("2") => {
+                return Err(self.err(format!(
+                    "asset.version is \"{v}\": glTF {v} is not supported; {convert}"
+                )));
             }
+            gltf::json::Value::String(_) => {}
             _ if !raw["version"].is_null() => {
                 return Err(self.err(format!(
                     "a top-level \"version\" ({}) and no asset.version: this is a glTF 1.0 (or older) file, which is not supported; {convert}",
@@ -664,9 +663,9 @@ impl Loader<'_> {
             ))
         };
         if let Some(rest) = uri.strip_prefix("data:") {
-            let (_, data) = rest.split_once(";base64,").ok_or_else(|| {
-                self.err(format!("{field}: only base64 data URIs are supported"))
-            })?;
+            let (_, data) = rest
+                .split_once(";base64,")
+                .ok_or_else(|| self.err(format!("{field}: only base64 data URIs are supported")))?;
             let bytes = decode_base64(data)
                 .ok_or_else(|| self.err(format!("{field}: invalid base64 in data URI")))?;
             if limit == UriLimit::Image && bytes.len() as u64 > MAX_IMAGE_FILE_BYTES {
@@ -795,9 +794,9 @@ impl Loader<'_> {
                 base.display()
             ))
         })?;
-        let real = path.canonicalize().map_err(|e| {
-            self.err(format!("{field}: cannot read '{}': {e}", path.display()))
-        })?;
+        let real = path
+            .canonicalize()
+            .map_err(|e| self.err(format!("{field}: cannot read '{}': {e}", path.display())))?;
         if !real.starts_with(&canonical_base) {
             return Err(self.err(format!(
                 "{field}: '{uri}' resolves{} to '{}', outside the scene folder '{}'; only files inside it are read {HINT}",
@@ -1265,10 +1264,10 @@ impl Loader<'_> {
                 gltf::json::Value::Null => Ok(None),
                 v => match v.as_f64().map(|x| x as f32) {
                     Some(x) if x.is_finite() => Ok(Some(x)),
-                    _ => Err(RenderError::gltf(file, format!(
-                        "{} = {v} is not a finite number",
-                        field(key)
-                    ))),
+                    _ => Err(RenderError::gltf(
+                        file,
+                        format!("{} = {v} is not a finite number", field(key)),
+                    )),
                 },
             }
         };
@@ -1332,9 +1331,10 @@ impl Loader<'_> {
                     )));
                 }
                 // The end pose: the node's rotation and scale with the end translation.
-                let node = doc.nodes().nth(node_index).ok_or_else(|| {
-                    self.err(format!("nodes[{node_index}] does not exist"))
-                })?;
+                let node = doc
+                    .nodes()
+                    .nth(node_index)
+                    .ok_or_else(|| self.err(format!("nodes[{node_index}] does not exist")))?;
                 let (_, r, s) = node.transform().decomposed();
                 let local0 = Mat4::from_cols_array_2d(&node.transform().matrix());
                 // Invertible: from_matrix accepted world = parent * local0.
@@ -1345,7 +1345,8 @@ impl Loader<'_> {
                         "nodes[{node_index}].rotation {r:?} is not a rotation quaternion: the motion end pose cannot be built"
                     )));
                 }
-                let local1 = Mat4::from_scale_rotation_translation(Vec3::from(s), q.normalize(), end);
+                let local1 =
+                    Mat4::from_scale_rotation_translation(Vec3::from(s), q.normalize(), end);
                 let end_spec = CameraSpec::from_matrix(parent * local1, yfov).ok_or_else(|| {
                     self.err(format!(
                         "{}: the camera's end pose is degenerate (non-finite or singular transform)",

@@ -29,9 +29,9 @@ use crate::light::{
     collect_area_lights, Emission, EnvironmentLight, LeSample, LightSample, Lights, PunctualLight,
 };
 use crate::material::Bsdf;
+pub use load_options::{LoadOptions, MAX_IMAGE_FILE_BYTES};
 pub use mesh::Mesh;
 pub use texture::{Texture, TextureFilter, WrapMode};
-pub use load_options::{LoadOptions, MAX_IMAGE_FILE_BYTES};
 
 /// A material's reference to a texture (a glTF `textureInfo`): which texture, which UV set,
 /// and the `KHR_texture_transform` applied to the UVs before the lookup.
