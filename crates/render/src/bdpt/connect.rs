@@ -98,7 +98,7 @@ pub fn connect<S: Sampler + ?Sized>(
                     // ls.pdf: solid-angle density at pt (selection only for delta lights).
                     let mut v =
                         Vertex::light(ls.p, ls.n, ls.light, ls.radiance / ls.pdf, 0.0, pt.time);
-                    v.uv = ls.uv;
+                    v.barycentrics = ls.barycentrics;
                     v.infinite = ls.infinite;
                     v.delta_light = ls.delta;
                     v.pdf_fwd = v.pdf_light_origin(scene, pt);

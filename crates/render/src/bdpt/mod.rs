@@ -106,8 +106,11 @@ pub fn sample<S, F>(
     );
     let time = camera[0].time;
     let n_light = light_subpath(scene, sampler, time, max_depth + 1, params.roulette, light);
+    // Strategy s = 1 samples its own light point (next-event estimation): it needs no light
+    // subpath, so it runs even when the subpath's origin was rejected (e.g. it landed on a
+    // black texel of an emissive texture) — requiring one biased it (pbrt-v3 does).
     for t in 1..=n_camera {
-        for s in 0..=n_light {
+        for s in 0..=n_light.max(1) {
             let depth = s as isize + t as isize - 2;
             if (s == 1 && t == 1) || depth < 0 || depth > max_depth as isize {
                 continue;
@@ -165,7 +168,9 @@ pub fn sample_strategy<S: Sampler + ?Sized>(
         return None;
     }
     let time = camera[0].time;
-    if light_subpath(scene, sampler, time, s, no_roulette, light) != s {
+    // s = 1 resamples its light point in `connect`: no light subpath needed (requiring one
+    // would reject paths whose unused subpath origin had no emission).
+    if s != 1 && light_subpath(scene, sampler, time, s, no_roulette, light) != s {
         return None;
     }
     let c = connect(scene, light, camera, s, t, sampler, params.heuristic, true);

@@ -20,7 +20,7 @@ pub(crate) struct Hit {
     pub(crate) ns: Vec3A,
     pub(crate) bsdf: Bsdf,
     pub(crate) light: Option<u32>,
-    pub(crate) uv: Vec2,
+    pub(crate) barycentrics: Vec2,
 }
 
 #[inline]
@@ -33,7 +33,7 @@ pub(crate) fn intersect(scene: SceneRef<'_>, ray: &Ray) -> Option<Hit> {
         ns: si.ns,
         bsdf: scene.bsdf(&si),
         light: scene.lights().light_of_triangle(si.triangle),
-        uv: si.uv,
+        barycentrics: si.barycentrics,
     })
 }
 
@@ -150,10 +150,10 @@ pub(crate) fn light_pdf_dir(scene: SceneRef<'_>, light: u32, dir: Vec3A) -> f32 
     scene.lights().pdf_le(light, dir).1
 }
 
-/// Radiance an area light emits at `uv` towards `dir`.
+/// Radiance an area light emits at barycentrics `b` towards `dir`.
 #[inline]
-pub(crate) fn area_le(scene: SceneRef<'_>, light: u32, uv: Vec2, dir: Vec3A) -> Vec3 {
-    scene.area_le(light, uv, dir)
+pub(crate) fn area_le(scene: SceneRef<'_>, light: u32, b: Vec2, dir: Vec3A) -> Vec3 {
+    scene.area_le(light, b, dir)
 }
 
 /// Radiance arriving from the environment along `wi` (towards the environment).

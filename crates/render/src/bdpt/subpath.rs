@@ -85,7 +85,7 @@ pub fn random_walk<S: Sampler + ?Sized>(
             wo: -ray.dir,
             bsdf: Some(hit.bsdf),
             light: hit.light,
-            uv: hit.uv,
+            barycentrics: hit.barycentrics,
             infinite: false,
             delta_light: false,
             beta,
@@ -215,7 +215,7 @@ pub fn light_subpath<S: Sampler + ?Sized>(
         scene.lights().lights()[le.light as usize].normal
     };
     let mut v = Vertex::light(le.p, n, le.light, le.radiance, le.pdf_pos, time);
-    v.uv = le.uv;
+    v.barycentrics = le.barycentrics;
     v.infinite = infinite;
     v.delta_light = scene_api::light_is_delta(scene, le.light);
     path[0] = v;

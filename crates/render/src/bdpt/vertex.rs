@@ -43,8 +43,8 @@ pub struct Vertex {
     pub bsdf: Option<Bsdf>,
     /// Emitter id if the point lies on an emitter (or is a light endpoint).
     pub light: Option<u32>,
-    /// Texture coordinates (emissive textures of area lights).
-    pub uv: Vec2,
+    /// Barycentrics `(b1, b2)` on the triangle (emissive textures of area lights).
+    pub barycentrics: Vec2,
     /// A light endpoint at infinity (environment, directional light): `p` stands `2 R` away
     /// and densities towards it stay in solid angle (pbrt-v3 `IsInfiniteLight`).
     pub infinite: bool,
@@ -74,7 +74,7 @@ impl Vertex {
             wo: Vec3A::ZERO,
             bsdf: None,
             light: None,
-            uv: Vec2::ZERO,
+            barycentrics: Vec2::ZERO,
             infinite: false,
             delta_light: false,
             beta,
@@ -97,7 +97,7 @@ impl Vertex {
             wo: Vec3A::ZERO,
             bsdf: None,
             light: Some(light),
-            uv: Vec2::ZERO,
+            barycentrics: Vec2::ZERO,
             infinite: false,
             delta_light: false,
             beta,
@@ -190,7 +190,7 @@ impl Vertex {
                 scene_api::environment_le(scene, (self.p - towards).normalize_or_zero())
             }
             Some(l) if !self.delta_light => {
-                scene_api::area_le(scene, l, self.uv, (towards - self.p).normalize_or_zero())
+                scene_api::area_le(scene, l, self.barycentrics, (towards - self.p).normalize_or_zero())
             }
             _ => Vec3::ZERO,
         }

@@ -24,10 +24,9 @@ pub struct AreaLight {
     pub two_sided: bool,
     /// Material index (for emissive textures).
     pub material: u32,
-    /// Texture coordinates of the three vertices.
-    pub uvs: [Vec2; 3],
-    /// True if the emission varies over the triangle (an emissive texture): the radiance at
-    /// a point is `radiance` times the texture there ([`crate::scene::Scene`] evaluates it).
+    /// True if the emission varies over the triangle (an emissive texture, or an alpha mask
+    /// that cuts parts out): the radiance at a point is `radiance` times the texture there,
+    /// zero where cut out ([`crate::scene::Scene::area_le`] evaluates it).
     pub textured: bool,
     /// Mean of the texture's luminance factor over the triangle (1 if untextured), for the
     /// selection by power.
@@ -62,17 +61,17 @@ impl AreaLight {
     #[inline]
     #[must_use]
     pub fn sample_point(&self, u: Vec2) -> Vec3A {
-        self.sample_point_uv(u).0
+        self.sample_point_bary(u).0
     }
 
-    /// As [`AreaLight::sample_point`], with the texture coordinates of the point.
+    /// As [`AreaLight::sample_point`], with the barycentrics `(b1, b2)` of the point (the
+    /// convention of [`crate::scene::SurfaceInteraction::barycentrics`]).
     #[inline]
     #[must_use]
-    pub fn sample_point_uv(&self, u: Vec2) -> (Vec3A, Vec2) {
+    pub fn sample_point_bary(&self, u: Vec2) -> (Vec3A, Vec2) {
         let [p0, p1, p2] = self.vertices;
         let [b0, b1, b2] = sample_uniform_triangle(u);
-        let [t0, t1, t2] = self.uvs;
-        (p0 * b0 + p1 * b1 + p2 * b2, t0 * b0 + t1 * b1 + t2 * b2)
+        (p0 * b0 + p1 * b1 + p2 * b2, Vec2::new(b1, b2))
     }
 }
 
@@ -83,7 +82,7 @@ pub struct Emission {
     pub radiance: Vec3,
     /// Emits from both sides.
     pub two_sided: bool,
-    /// Has an emissive texture.
+    /// Varies over the surface (an emissive texture or a cut-out mask).
     pub textured: bool,
 }
 
@@ -112,8 +111,6 @@ pub fn collect(
         if !(area > 0.0 && area.is_finite()) {
             continue;
         }
-        let [i0, i1, i2] = mesh.triangles[t].map(|i| i as usize);
-        let uv = |i: usize| mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO);
         let power_scale = if e.textured {
             let m = texture_mean(t);
             if m.is_finite() {
@@ -132,7 +129,6 @@ pub fn collect(
             radiance,
             two_sided: e.two_sided,
             material,
-            uvs: [uv(i0), uv(i1), uv(i2)],
             textured: e.textured,
             power_scale,
         };

@@ -74,8 +74,8 @@ pub struct LightSample {
     pub delta: bool,
     /// True for infinite lights (environment, directional).
     pub infinite: bool,
-    /// Texture coordinates of the point on an area light.
-    pub uv: Vec2,
+    /// Barycentrics `(b1, b2)` of the point on an area light.
+    pub barycentrics: Vec2,
 }
 
 /// A sampled emission: a point on a light and a direction leaving it (light tracing, BDPT).
@@ -102,8 +102,8 @@ pub struct LeSample {
     /// `|cos|` between `n` and `dir` for area lights, 1 otherwise: the subpath throughput is
     /// `radiance * cos / (pdf_pos * pdf_dir)`.
     pub cos: f32,
-    /// Texture coordinates of the point on an area light.
-    pub uv: Vec2,
+    /// Barycentrics `(b1, b2)` of the point on an area light.
+    pub barycentrics: Vec2,
 }
 
 /// All lights of a scene with a power-proportional selection distribution.
@@ -349,7 +349,7 @@ impl Lights {
         let far = 2.0 * self.radius + (p_ref - self.center).length();
         match self.get(index)? {
             LightRef::Area(light) => {
-                let (p, uv) = light.sample_point_uv(u_pos);
+                let (p, bary) = light.sample_point_bary(u_pos);
                 let d = p - p_ref;
                 let dist2 = d.length_squared();
                 if !(dist2 > 0.0 && dist2.is_finite()) {
@@ -375,7 +375,7 @@ impl Lights {
                     pdf,
                     delta: false,
                     infinite: false,
-                    uv,
+                    barycentrics: bary,
                 })
             }
             LightRef::Punctual(light) => {
@@ -404,7 +404,7 @@ impl Lights {
                     pdf: pmf,
                     delta: true,
                     infinite: light.is_directional(),
-                    uv: Vec2::ZERO,
+                    barycentrics: Vec2::ZERO,
                 })
             }
             LightRef::Environment(env) => {
@@ -423,7 +423,7 @@ impl Lights {
                     pdf,
                     delta: false,
                     infinite: true,
-                    uv: Vec2::ZERO,
+                    barycentrics: Vec2::ZERO,
                 })
             }
         }
@@ -476,7 +476,7 @@ impl Lights {
         let disc_pdf = 1.0 / (PI * self.radius * self.radius);
         let sample = match self.get(index)? {
             LightRef::Area(light) => {
-                let (p, uv) = light.sample_point_uv(u_pos);
+                let (p, bary) = light.sample_point_bary(u_pos);
                 let (mut u, mut n, mut side_pdf) = (u_dir, light.normal, 1.0);
                 if light.two_sided {
                     side_pdf = 0.5;
@@ -499,7 +499,7 @@ impl Lights {
                     pdf_pos: pmf / light.area,
                     pdf_dir: side_pdf * cosine_hemisphere_pdf(local.z),
                     cos: n.dot(dir).abs(),
-                    uv,
+                    barycentrics: bary,
                 }
             }
             LightRef::Punctual(light) => match light.kind {
@@ -512,7 +512,7 @@ impl Lights {
                     pdf_pos: pmf * disc_pdf,
                     pdf_dir: 1.0,
                     cos: 1.0,
-                    uv: Vec2::ZERO,
+                    barycentrics: Vec2::ZERO,
                 },
                 PunctualKind::Point => {
                     let dir = sample_uniform_sphere(u_dir);
@@ -525,7 +525,7 @@ impl Lights {
                         pdf_pos: pmf,
                         pdf_dir: uniform_sphere_pdf(),
                         cos: 1.0,
-                        uv: Vec2::ZERO,
+                        barycentrics: Vec2::ZERO,
                     }
                 }
                 PunctualKind::Spot { cos_outer, .. } => {
@@ -542,7 +542,7 @@ impl Lights {
                         pdf_pos: pmf,
                         pdf_dir: uniform_cone_pdf(cos_outer),
                         cos: 1.0,
-                        uv: Vec2::ZERO,
+                        barycentrics: Vec2::ZERO,
                     }
                 }
             },
@@ -558,7 +558,7 @@ impl Lights {
                     pdf_pos: pmf * disc_pdf,
                     pdf_dir: s.pdf,
                     cos: 1.0,
-                    uv: Vec2::ZERO,
+                    barycentrics: Vec2::ZERO,
                 }
             }
         };

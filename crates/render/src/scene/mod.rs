@@ -634,13 +634,24 @@ impl Scene {
         Emission {
             radiance: m.emission,
             two_sided: m.double_sided,
-            textured: false,
+            textured: m.emissive_texture.is_some() || self.cutout[id as usize],
         }
     }
 
-    /// Mean emissive-texture factor over triangle `t` (1 without a texture).
-    fn emission_texture_mean(&self, _t: usize) -> f32 {
-        1.0
+    /// Mean emissive-texture luminance factor over triangle `t` (for selection by power):
+    /// the average over a fixed 6 x 6 stratified pattern of points.
+    fn emission_texture_mean(&self, t: usize) -> f32 {
+        let n = 6;
+        let mut sum = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let [_, b1, b2] = crate::warp::sample_uniform_triangle(u);
+                let f = self.emission_texture(t as u32, Vec2::new(b1, b2));
+                sum += crate::image::luminance(f.to_array());
+            }
+        }
+        sum / (n * n) as f32
     }
 
     /// Adds punctual lights (point, spot, directional) and rebuilds the light list. The
@@ -981,32 +992,40 @@ impl Scene {
     #[must_use]
     pub fn emitted(&self, si: &SurfaceInteraction, w: Vec3A) -> Vec3 {
         match self.lights.light_of_triangle(si.triangle) {
-            Some(l) => self.area_le(l, si.uv, w),
+            Some(l) => self.area_le(l, si.barycentrics, w),
             None => Vec3::ZERO,
         }
     }
 
-    /// Radiance emitted by area light `light` at texture coordinates `uv` towards `w` (zero
-    /// towards the back of a one-sided emitter): the material's emission times its emissive
-    /// texture.
+    /// Radiance emitted by area light `light` at barycentrics `b` (`(b1, b2)`) towards `w`
+    /// (zero towards the back of a one-sided emitter): the material's emission times its
+    /// emissive texture, zero where an alpha mask cuts the surface out.
     #[inline]
     #[must_use]
-    pub fn area_le(&self, light: u32, uv: Vec2, w: Vec3A) -> Vec3 {
+    pub fn area_le(&self, light: u32, b: Vec2, w: Vec3A) -> Vec3 {
         let Some(l) = self.lights.lights().get(light as usize) else {
             return Vec3::ZERO;
         };
         let le = l.le(w);
         if l.textured && le != Vec3::ZERO {
-            le * self.emission_texture(l.material, uv)
+            le * self.emission_texture(l.triangle, b)
         } else {
             le
         }
     }
 
-    /// The emissive-texture factor of material `material` at `uv` (1 without a texture).
+    /// The factor of the emissive texture of triangle `tri` at barycentrics `b` (1 without a
+    /// texture; 0 where an alpha mask cuts the surface out).
     #[inline]
-    fn emission_texture(&self, _material: u32, _uv: Vec2) -> Vec3 {
-        Vec3::ONE
+    fn emission_texture(&self, tri: u32, b: Vec2) -> Vec3 {
+        if !self.surface_exists(tri, b) {
+            return Vec3::ZERO;
+        }
+        let m = &self.materials[self.mesh.material_ids[tri as usize] as usize];
+        match &m.emissive_texture {
+            Some(t) => t.sample(&self.textures, self.mesh.tex_coords(tri as usize, b)),
+            None => Vec3::ONE,
+        }
     }
 
     /// Samples incident light at `p_ref` ([`Lights::sample_li`]) with the emissive texture
@@ -1017,7 +1036,7 @@ impl Scene {
         let mut ls = self.lights.sample_li(p_ref, u_light, u_pos)?;
         if let Some(l) = self.lights.lights().get(ls.light as usize) {
             if l.textured {
-                ls.radiance *= self.emission_texture(l.material, ls.uv);
+                ls.radiance *= self.emission_texture(l.triangle, ls.barycentrics);
             }
         }
         Some(ls)
@@ -1031,7 +1050,7 @@ impl Scene {
         let mut le = self.lights.sample_le(u_light, u_pos, u_dir)?;
         if let Some(l) = self.lights.lights().get(le.light as usize) {
             if l.textured {
-                le.radiance *= self.emission_texture(l.material, le.uv);
+                le.radiance *= self.emission_texture(l.triangle, le.barycentrics);
                 if le.radiance == Vec3::ZERO {
                     return None;
                 }
@@ -1046,7 +1065,7 @@ impl Scene {
     #[must_use]
     pub fn unoccluded_towards(&self, from: &SurfaceInteraction, dir: Vec3A) -> bool {
         let origin = offset_ray_origin(from.p, from.p_error, from.ng, dir);
-        !self.bvh.occluded(origin, dir, f32::INFINITY)
+        !self.segment_blocked(origin, dir, f32::INFINITY)
     }
 }
 
