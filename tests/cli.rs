@@ -775,3 +775,77 @@ fn huge_emission_through_pssmlt_gives_no_inf() {
         .flatten()
         .all(|c| *c > 1e29 && c.is_finite()));
 }
+
+/// `--env`: a lightless model renders under the default environment with a note; `--env none`
+/// renders it black; a constant and a map environment light it; bad values name the flag.
+#[test]
+fn environment_flags() {
+    let dir = temp_dir("env");
+    let model = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/third-party/BoxVertexColors/BoxVertexColors.glb"
+    );
+    let render = |extra: &[&str], name: &str| -> (Output, Image) {
+        let out = dir.join(name);
+        let mut args = vec![
+            "render",
+            model,
+            "--integrator",
+            "pt",
+            "--spp",
+            "4",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "-o",
+            path_str(&out),
+        ];
+        args.extend_from_slice(extra);
+        let output = chainlight(&args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let image = read_exr(&out).unwrap();
+        (output, image)
+    };
+    let mean = |im: &Image| im.pixels.iter().map(|p| p[1]).sum::<f32>() / im.pixels.len() as f32;
+    let (output, default) = render(&[], "default.exr");
+    let text = format!("{}{}", stdout(&output), stderr(&output));
+    assert!(text.contains("default uniform white environment"), "{text}");
+    assert!(mean(&default) > 0.1);
+    let (_, none) = render(&["--env", "none"], "none.exr");
+    assert_eq!(mean(&none), 0.0);
+    let (_, dim) = render(&["--env", "0.5", "--env-strength", "0.5"], "dim.exr");
+    // The background is exactly the environment's radiance.
+    assert!(
+        (dim.pixels[0][1] - 0.25).abs() < 1e-6,
+        "{:?}",
+        dim.pixels[0]
+    );
+    let mut map = Image::new(8, 4);
+    for (i, p) in map.pixels.iter_mut().enumerate() {
+        *p = [0.1 * (i % 8) as f32, 0.2, 0.3];
+    }
+    let map_path = dir.join("sky.exr");
+    write_exr(&map_path, &map).unwrap();
+    let (_, lit) = render(
+        &["--env", path_str(&map_path), "--env-rotate", "45"],
+        "map.exr",
+    );
+    assert!(mean(&lit) > 0.0 && lit.pixels.iter().flatten().all(|c| c.is_finite()));
+    let out = dir.join("x.exr");
+    for (args, needle) in [
+        (vec!["--env", "1,2"], "--env"),
+        (vec!["--env", "-1"], "0..=1000000"),
+        (vec!["--env", "missing.hdr"], "no such file"),
+        (vec!["--env", "1", "--env-rotate", "400"], "-360..=360"),
+        (
+            vec!["--env", "1", "--env-strength", "nan"],
+            "--env-strength",
+        ),
+        (vec!["--env-strength", "2"], "--env"),
+    ] {
+        let mut full = vec!["render", "--spp", "1", "-o", path_str(&out)];
+        full.extend(args);
+        assert_fails_with(&full, &[needle]);
+    }
+}
