@@ -58,13 +58,13 @@ pub mod session;
 mod test_util;
 pub mod warp;
 
-/// The vector maths crate of the public API (positions, colours), re-exported.
-pub use glam;
 pub use bdpt::{render_bdpt, BdptOutput, BdptParams};
 pub use budget::Budget;
 pub use camera::Camera;
 pub use error::RenderError;
 pub use film::{Film, FilmTile, Filter};
+/// The vector maths crate of the public API (positions, colours), re-exported.
+pub use glam;
 pub use image::Image;
 pub use integrator::pt_driver::{render_pt, PtOutput, PtSettings};
 pub use integrator::{IntegratorInfo, IntegratorKind, INTEGRATORS};

@@ -1,9 +1,11 @@
 //! How to move: proposals with exact transition densities, mixtures and scale wrappers.
 
+mod conditional;
 mod gaussian;
 mod mixture;
 mod scaled;
 
+pub use conditional::ConditionalProposal;
 pub use gaussian::GaussianRandomWalk;
 pub use mixture::{FixedSelection, Mixture, Selection, MAX_COMPONENTS};
 pub use scaled::{Regional, Scaled, ScaledProposal};

@@ -142,7 +142,6 @@ pub fn random_walk<S: Sampler + ?Sized>(
     added
 }
 
-
 /// Generates a camera subpath of at most `max_vertices` vertices (including the camera
 /// vertex) for the raster position `p_raster` into `path`; returns its length. Random numbers:
 /// stream [`Stream::Camera`]: lens (2), time (1), then 3 per bounce (+1 with roulette).

@@ -189,9 +189,12 @@ impl Vertex {
             Some(_) if self.infinite && !self.delta_light => {
                 scene_api::environment_le(scene, (self.p - towards).normalize_or_zero())
             }
-            Some(l) if !self.delta_light => {
-                scene_api::area_le(scene, l, self.barycentrics, (towards - self.p).normalize_or_zero())
-            }
+            Some(l) if !self.delta_light => scene_api::area_le(
+                scene,
+                l,
+                self.barycentrics,
+                (towards - self.p).normalize_or_zero(),
+            ),
             _ => Vec3::ZERO,
         }
     }

@@ -122,7 +122,10 @@ impl Distribution2D {
     /// If `nu` is 0 or `func.len()` is not a multiple of `nu`.
     #[must_use]
     pub fn new(func: &[f32], nu: usize) -> Self {
-        assert!(nu > 0 && func.len().is_multiple_of(nu), "bad Distribution2D shape");
+        assert!(
+            nu > 0 && func.len().is_multiple_of(nu),
+            "bad Distribution2D shape"
+        );
         let conditional: Vec<Distribution1D> = func.chunks(nu).map(Distribution1D::new).collect();
         // Rows whose values are all 0 have integral 0 in the marginal (Distribution1D::new
         // made them uniform internally, so use the raw sums).

@@ -672,7 +672,8 @@ impl Scene {
     /// and none was set).
     #[must_use]
     pub fn uses_default_environment(&self) -> bool {
-        matches!(self.environment, EnvironmentChoice::Default) && self.lights.environment().is_some()
+        matches!(self.environment, EnvironmentChoice::Default)
+            && self.lights.environment().is_some()
     }
 
     /// Loads a `.gltf` (with external or embedded buffers and images) or `.glb` file.
