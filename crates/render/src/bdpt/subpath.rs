@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3, Vec3A};
 use super::scene_api::{self, SceneRef};
 use super::vertex::{shading_normal_correction, Vertex, VertexKind};
 use crate::camera::Ray;
-use crate::frame::Frame;
+use crate::frame::{shading_consistent, Frame};
 use crate::material::TransportMode;
 use crate::sampler::{Sampler, Stream};
 
@@ -110,6 +110,9 @@ pub fn random_walk<S: Sampler + ?Sized>(
             break;
         }
         let wi = v.frame.to_world(bs.wi);
+        if !shading_consistent(v.wo, wi, v.ng, v.ns()) {
+            break;
+        }
         let cos = bs.wi.z.abs();
         let mut factor = bs.f * (cos / bs.pdf);
         if mode == TransportMode::Importance {

@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3, Vec3A};
 
 use super::scene_api::{self, SceneRef};
 use crate::camera::Ray;
-use crate::frame::Frame;
+use crate::frame::{shading_consistent, Frame};
 use crate::material::{Bsdf, TransportMode};
 
 /// Maximum number of vertices of a subpath (max depth 62 + 2 endpoints).
@@ -174,6 +174,9 @@ impl Vertex {
             return Vec3::ZERO;
         };
         let wi = (next.p - self.p).normalize_or_zero();
+        if !shading_consistent(self.wo, wi, self.ng, self.ns()) {
+            return Vec3::ZERO;
+        }
         let f = bsdf.eval(self.frame.to_local(self.wo), self.frame.to_local(wi), mode);
         if mode == TransportMode::Importance && f != Vec3::ZERO {
             f * shading_normal_correction(self.wo, wi, self.ng, self.ns())

@@ -13,7 +13,7 @@ use glam::{UVec2, Vec2, Vec3};
 
 use super::power_heuristic;
 use crate::camera::{Camera, Ray};
-use crate::frame::Frame;
+use crate::frame::{shading_consistent, Frame};
 use crate::material::TransportMode;
 use crate::sampler::{Sampler, Stream};
 use crate::scene::Scene;
@@ -84,7 +84,11 @@ pub fn li<S: Sampler + ?Sized>(scene: &Scene, ray: Ray, sampler: &mut S, max_dep
             if let Some(ls) = scene.sample_li(si.p, u_light, u_light_pos) {
                 if ls.radiance != Vec3::ZERO {
                     let wi = frame.to_local(ls.wi);
-                    let f = bsdf.eval(wo, wi, TransportMode::Radiance) * wi.z.abs();
+                    let f = if shading_consistent(si.wo, ls.wi, si.ng, si.ns) {
+                        bsdf.eval(wo, wi, TransportMode::Radiance) * wi.z.abs()
+                    } else {
+                        Vec3::ZERO
+                    };
                     let visible = || {
                         if ls.infinite {
                             scene.unoccluded_towards(&si, ls.wi)
@@ -118,6 +122,9 @@ pub fn li<S: Sampler + ?Sized>(scene: &Scene, ray: Ray, sampler: &mut S, max_dep
         let Some(dir) = frame.to_world(bs.wi).try_normalize() else {
             break;
         };
+        if !shading_consistent(si.wo, dir, si.ng, si.ns) {
+            break;
+        }
         ray = si.spawn_ray(dir, ray.time);
         if !beta.is_finite() || beta.max_element() <= 0.0 {
             break;
