@@ -26,13 +26,22 @@ mod error;
 mod fresh;
 mod mutation;
 pub mod noise;
+pub mod orbital;
+mod pairwise;
 mod proposal;
 mod state;
 #[cfg(feature = "testing")]
 pub mod testing;
+mod wrapped_cauchy;
 
 pub use error::PssError;
 pub use fresh::FreshPss;
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
+pub use orbital::Orbital;
+pub use pairwise::{
+    torus_displacement, Group, PairLayout, PairwiseKelemen, PairwiseKelemenParams,
+    DRMLT2020_RADIUS_SCALE,
+};
 pub use proposal::{LargeStep, PssmltProposal, SmallStep, ALL_STREAMS};
 pub use state::{Pending, PssState, MAX_STREAMS};
+pub use wrapped_cauchy::{WrappedCauchy, DRMLT2020_RHO};

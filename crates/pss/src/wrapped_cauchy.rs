@@ -1,0 +1,204 @@
+//! The wrapped Cauchy distribution on the circle: the angle law of the orbital second stage.
+
+use std::f64::consts::{PI, TAU};
+
+use rand::{Rng, RngExt};
+
+use crate::PssError;
+
+/// `exp(-1/4)`: the concentration the delayed-rejection MLT paper uses in all its orbital
+/// experiments (section 5.1.1), also the authors' code default.
+pub const DRMLT2020_RHO: f64 = 0.778_800_783_071_404_9;
+
+/// The wrapped Cauchy distribution of an angle `theta` on the circle, with concentration
+/// `rho` in `[0, 1)` (delayed-rejection MLT paper, eq. 10):
+///
+/// `p(theta) = (1 - rho^2) / (2 pi (1 + rho^2 - 2 rho cos theta))`,
+///
+/// with respect to the angle measure `d theta` on `[-pi, pi)`. It is the uniform law for
+/// `rho = 0` and concentrates at `theta = 0` as `rho -> 1` (a Dirac at `rho = 1`, which is
+/// not allowed). Symmetric: `p(-theta) = p(theta)`.
+///
+/// Sampling inverts the closed-form CDF (the reason the paper picks this law):
+/// `F(theta) = 1/2 + atan(k tan(theta / 2)) / pi` on `[-pi, pi)` with
+/// `k = (1 + rho) / (1 - rho)`, so `theta = 2 atan(tan(pi (u - 1/2)) / k)` for one uniform `u`
+/// (for `rho = exp(-kappa)`, `1 / k = tanh(kappa / 2)`). The authors' code instead draws
+/// `|theta| = acos((v + c) / (1 + c v))` with `v = cos(2 pi u)`, `c = 2 rho / (1 + rho^2)`,
+/// and a random sign: the same law from two uniforms.
+///
+/// # Example
+/// ```
+/// use pss::WrappedCauchy;
+///
+/// let wc = WrappedCauchy::drmlt2020();
+/// assert!((wc.cdf(wc.quantile(0.3)) - 0.3).abs() < 1e-12);
+/// assert!(wc.pdf(0.0) > wc.pdf(3.0));
+/// assert!(WrappedCauchy::new(1.0).is_err());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WrappedCauchy {
+    rho: f64,
+    /// `(1 - rho) / (1 + rho)`: the scale of the tangent in the quantile.
+    inverse_k: f64,
+    /// `log((1 - rho^2) / (2 pi))`.
+    log_numerator: f64,
+}
+
+impl WrappedCauchy {
+    /// The distribution with concentration `rho` in `[0, 1)`.
+    ///
+    /// # Errors
+    /// [`PssError::InvalidParameter`] if `rho` is outside `[0, 1)` or not finite.
+    pub fn new(rho: f64) -> Result<Self, PssError> {
+        if !(0.0..1.0).contains(&rho) {
+            return Err(PssError::InvalidParameter {
+                name: "rho",
+                value: rho.to_string(),
+                allowed: "[0, 1)",
+            });
+        }
+        Ok(Self {
+            rho,
+            inverse_k: (1.0 - rho) / (1.0 + rho),
+            log_numerator: ((1.0 - rho * rho) / TAU).ln(),
+        })
+    }
+
+    /// `rho = exp(-1/4)` ([`DRMLT2020_RHO`]), the paper's value (section 5.1.1).
+    #[must_use]
+    pub fn drmlt2020() -> Self {
+        Self::new(DRMLT2020_RHO).expect("valid constant")
+    }
+
+    /// The concentration `rho`.
+    #[must_use]
+    pub fn rho(&self) -> f64 {
+        self.rho
+    }
+
+    /// The density at angle `theta` (any real number; the density is `2 pi`-periodic), eq. 10.
+    #[must_use]
+    pub fn pdf(&self, theta: f64) -> f64 {
+        self.log_pdf(theta).exp()
+    }
+
+    /// The log density at angle `theta`.
+    #[must_use]
+    pub fn log_pdf(&self, theta: f64) -> f64 {
+        let r = self.rho;
+        self.log_numerator - (1.0 + r * r - 2.0 * r * theta.cos()).ln()
+    }
+
+    /// `P(Theta < theta)` for `theta` in `[-pi, pi)` (other angles are first wrapped into
+    /// that interval).
+    #[must_use]
+    pub fn cdf(&self, theta: f64) -> f64 {
+        let t = wrap_angle(theta);
+        let f = 0.5 + ((t * 0.5).tan() / self.inverse_k).atan() / PI;
+        f.clamp(0.0, 1.0)
+    }
+
+    /// The angle in `[-pi, pi]` with `cdf(angle) = u`, for `u` in `[0, 1)`: inversion
+    /// sampling. Increasing in `u`; `quantile(1/2) = 0`.
+    #[inline]
+    #[must_use]
+    pub fn quantile(&self, u: f64) -> f64 {
+        2.0 * (self.inverse_k * (PI * (u - 0.5)).tan()).atan()
+    }
+
+    /// One draw from one uniform of `rng`.
+    #[inline]
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        self.quantile(rng.random())
+    }
+}
+
+impl Default for WrappedCauchy {
+    /// [`WrappedCauchy::drmlt2020`].
+    fn default() -> Self {
+        Self::drmlt2020()
+    }
+}
+
+/// Wraps an angle into `[-pi, pi)`.
+#[inline]
+#[must_use]
+pub(crate) fn wrap_angle(theta: f64) -> f64 {
+    let t = theta - TAU * ((theta + PI) / TAU).floor();
+    if t >= PI {
+        t - TAU
+    } else {
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constant_is_exp_minus_quarter() {
+        assert!((DRMLT2020_RHO - (-0.25f64).exp()).abs() < 1e-16);
+        let wc = WrappedCauchy::drmlt2020();
+        assert!((wc.inverse_k - (0.125f64).tanh()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn rejects_bad_rho() {
+        for rho in [-0.1, 1.0, 1.5, f64::NAN, f64::INFINITY] {
+            assert!(WrappedCauchy::new(rho).is_err(), "{rho}");
+        }
+        assert!(WrappedCauchy::new(0.0).is_ok());
+        assert!(WrappedCauchy::new(0.999).is_ok());
+    }
+
+    #[test]
+    fn density_integrates_to_one_and_is_the_cdf_derivative() {
+        for rho in [0.0, 0.3, DRMLT2020_RHO, 0.95] {
+            let wc = WrappedCauchy::new(rho).unwrap();
+            let n = 200_000;
+            let h = TAU / n as f64;
+            let total: f64 = (0..n).map(|i| wc.pdf(-PI + (i as f64 + 0.5) * h) * h).sum();
+            assert!((total - 1.0).abs() < 1e-9, "rho {rho}: {total}");
+            for theta in [-2.5, -0.4, 0.0, 0.1, 1.0, 3.0] {
+                let d = 1e-6;
+                let numeric = (wc.cdf(theta + d) - wc.cdf(theta - d)) / (2.0 * d);
+                assert!(
+                    (numeric - wc.pdf(theta)).abs() < 1e-6 * (1.0 + wc.pdf(theta)),
+                    "rho {rho}, theta {theta}: {numeric} vs {}",
+                    wc.pdf(theta)
+                );
+            }
+            assert!((wc.pdf(0.7) - wc.pdf(-0.7)).abs() < 1e-15);
+            assert!((wc.pdf(0.7) - wc.pdf(0.7 + TAU)).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn quantile_inverts_cdf() {
+        for rho in [0.0, 0.5, DRMLT2020_RHO, 0.99] {
+            let wc = WrappedCauchy::new(rho).unwrap();
+            assert_eq!(wc.quantile(0.5), 0.0);
+            let mut last = -PI - 1e-9;
+            for i in 0..1000 {
+                let u = (i as f64 + 0.5) / 1000.0;
+                let t = wc.quantile(u);
+                assert!(t > last && (-PI..=PI).contains(&t));
+                last = t;
+                assert!((wc.cdf(t) - u).abs() < 1e-12, "rho {rho}, u {u}");
+            }
+            assert!(wc.quantile(0.0).is_finite());
+        }
+        let uniform = WrappedCauchy::new(0.0).unwrap();
+        assert!((uniform.quantile(0.75) - PI / 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn angles_wrap_into_half_open_interval() {
+        for t in [-PI, PI, 3.0 * PI, -7.0, 0.0, 10.0] {
+            let w = wrap_angle(t);
+            assert!((-PI..PI).contains(&w), "{t} -> {w}");
+            assert!(((t - w) / TAU - ((t - w) / TAU).round()).abs() < 1e-12);
+        }
+    }
+}
