@@ -14,7 +14,7 @@
 //!   are f64.
 //! * Non-finite samples are counted and dropped, never splatted.
 
-use glam::{Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 use mcmc_core::render_loop::{SplatGrid, SplatSink};
 
 use crate::image::Image;
@@ -108,6 +108,21 @@ impl Filter {
         let hi = (p - 0.5 + r).floor() as i64;
         (lo, hi)
     }
+}
+
+/// The raster position of a sample of pixel `pixel` drawn with `u` in `[0, 1)^2`: `pixel + u`,
+/// kept inside the pixel. In f32, `x + u` rounds up to `x + 1` when `1 - u` is at most half an
+/// ulp of `x`: with the samplers' 24-bit uniforms, for every `x >= 1` (probability about
+/// `2^(e-24)` per axis, `2^e <= x < 2^(e+1)`); such a sample would land on the next pixel's
+/// edge, or off the image, its tile or its band, where [`FilmTile::add_sample`] adds it
+/// nowhere (a lost sample). The clamp moves it by less than one ulp.
+#[inline]
+#[must_use]
+pub fn pixel_sample_position(pixel: UVec2, u: Vec2) -> Vec2 {
+    let lo = pixel.as_vec2();
+    // `lo + 1` is exact (pixel indices are far below 2^24); its predecessor floors to `lo`.
+    let last = Vec2::new((lo.x + 1.0).next_down(), (lo.y + 1.0).next_down());
+    (lo + u).min(last)
 }
 
 /// A rectangle of pixels `[x0, x1) x [y0, y1)`.

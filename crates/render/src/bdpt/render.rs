@@ -5,13 +5,13 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use glam::{Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 use mcmc_core::render_loop::SplatGrid;
 use mcmc_core::Progress;
 use rayon::prelude::*;
 
 use super::{sample, BdptParams, BdptScratch, SceneRef, StrategySplat, MAX_VERTICES};
-use crate::film::{Film, FilmTile, Filter, PixelRect};
+use crate::film::{pixel_sample_position, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
 use crate::sampler::{IndependentSampler, Sampler};
 
@@ -123,7 +123,8 @@ impl Band {
                     return false;
                 }
                 sampler.start_pixel_sample((y * w + x) as u64, u64::from(pass.index));
-                let p_raster = Vec2::new(x as f32, y as f32) + sampler.next_2d();
+                let pixel = UVec2::new(x as u32, y as u32);
+                let p_raster = pixel_sample_position(pixel, sampler.next_2d());
                 self.sample(pass, &mut sampler, p_raster);
             }
             pass.progress.advance(w as u64);

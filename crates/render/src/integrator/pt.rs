@@ -13,6 +13,7 @@ use glam::{UVec2, Vec2, Vec3};
 
 use super::power_heuristic;
 use crate::camera::{Camera, Ray};
+use crate::film::pixel_sample_position;
 use crate::frame::{shading_consistent, Frame};
 use crate::material::TransportMode;
 use crate::sampler::{Sampler, Stream};
@@ -152,7 +153,7 @@ pub fn sample_pixel<S: Sampler + ?Sized>(
     max_depth: u32,
 ) -> (Vec2, Vec3) {
     sampler.start_stream(Stream::Camera);
-    let p_raster = pixel.as_vec2() + sampler.next_2d();
+    let p_raster = pixel_sample_position(pixel, sampler.next_2d());
     let u_lens = sampler.next_2d();
     let u_time = sampler.next_1d();
     let ray = camera.generate_ray(p_raster, u_lens, u_time);
