@@ -136,35 +136,27 @@ impl Orbital {
         Self { angle }
     }
 
-    /// Writes `z` for the coordinates of `groups`, given `x` (`read_x`) and `y` (`read_y`):
-    /// pairs on their orbit, lone coordinates at `x`. Returns false (and writes nothing more)
-    /// if a pair's orbit has radius `>= 1/2`.
-    pub fn orbit<R: Rng + ?Sized>(
+    /// The pair of `z` on the orbit of the pairs `x`, `y`: `y + R(theta) (x - y)` with minimal
+    /// torus displacements, wrapped; `None` if the orbit's radius is `>= 1/2`. One uniform
+    /// (drawn in both cases).
+    #[inline]
+    pub fn orbit_pair<R: Rng + ?Sized>(
         &self,
-        groups: impl Iterator<Item = Group>,
-        read_x: impl Fn(usize) -> f64,
-        read_y: impl Fn(usize) -> f64,
-        mut write: impl FnMut(usize, f64),
+        x: [f64; 2],
+        y: [f64; 2],
         rng: &mut R,
-    ) -> bool {
-        for group in groups {
-            match group {
-                Group::Pair(a, b) => {
-                    let (ya, yb) = (read_y(a), read_y(b));
-                    let dx = torus_displacement(ya, read_x(a));
-                    let dy = torus_displacement(yb, read_x(b));
-                    let theta = self.angle.sample(rng);
-                    if dx.hypot(dy) >= 0.5 {
-                        return false;
-                    }
-                    let (sin, cos) = theta.sin_cos();
-                    write(a, wrap(ya + cos * dx - sin * dy));
-                    write(b, wrap(yb + sin * dx + cos * dy));
-                }
-                Group::Single(a) => write(a, read_x(a)),
-            }
+    ) -> Option<[f64; 2]> {
+        let dx = torus_displacement(y[0], x[0]);
+        let dy = torus_displacement(y[1], x[1]);
+        let theta = self.angle.sample(rng);
+        if dx.hypot(dy) >= 0.5 {
+            return None;
         }
-        true
+        let (sin, cos) = theta.sin_cos();
+        Some([
+            wrap(y[0] + cos * dx - sin * dy),
+            wrap(y[1] + sin * dx + cos * dy),
+        ])
     }
 
     /// `log q2(z | x, y)` over the coordinates of `groups` (see the module docs for the
@@ -224,12 +216,16 @@ impl ConditionalProposal<Vec<f64>> for Orbital {
         if y.len() != x.len() {
             return Proposed::Invalid { component: 0 };
         }
-        let layout = PairLayout::single_stream(x.len());
-        if self.orbit(layout.groups(1), |i| x[i], |i| y[i], |i, v| z[i] = v, rng) {
-            Proposed::symmetric()
-        } else {
-            Proposed::Invalid { component: 0 }
+        for group in PairLayout::single_stream(x.len()).groups(1) {
+            // Lone coordinates stay at x (z is a copy of x).
+            if let Group::Pair(a, b) = group {
+                match self.orbit_pair([x[a], x[b]], [y[a], y[b]], rng) {
+                    Some(pair) => [z[a], z[b]] = pair,
+                    None => return Proposed::Invalid { component: 0 },
+                }
+            }
         }
+        Proposed::symmetric()
     }
 
     /// The density of `z` on the orbit of `(x, y)` w.r.t. the product of the orbits' angle

@@ -315,29 +315,24 @@ impl PairwiseKelemen {
         Self { params }
     }
 
-    /// Moves the coordinates of `groups`: reads the current values with `read`, writes the
-    /// candidate's with `write` (wrapped into `[0, 1)`).
-    pub fn perturb<R: Rng + ?Sized>(
-        &self,
-        groups: impl Iterator<Item = Group>,
-        read: impl Fn(usize) -> f64,
-        mut write: impl FnMut(usize, f64),
-        rng: &mut R,
-    ) {
-        for group in groups {
-            let r = self.params.radius(rng.random());
-            match group {
-                Group::Pair(a, b) => {
-                    let (sin, cos) = (TAU * rng.random::<f64>()).sin_cos();
-                    write(a, wrap(read(a) + r * cos));
-                    write(b, wrap(read(b) + r * sin));
-                }
-                Group::Single(a) => {
-                    let d = if rng.random::<f64>() < 0.5 { r } else { -r };
-                    write(a, wrap(read(a) + d));
-                }
-            }
-        }
+    /// A pair `(a, b)` moved by `r (cos phi, sin phi)` and wrapped. Two uniforms: the radius,
+    /// then the angle.
+    #[inline]
+    pub fn perturb_pair<R: Rng + ?Sized>(&self, [a, b]: [f64; 2], rng: &mut R) -> [f64; 2] {
+        let r = self.params.radius(rng.random());
+        let (sin, cos) = (TAU * rng.random::<f64>()).sin_cos();
+        [wrap(a + r * cos), wrap(b + r * sin)]
+    }
+
+    /// A lone coordinate moved by `+-r` and wrapped. Two uniforms: the radius, then the sign.
+    #[inline]
+    pub fn perturb_single<R: Rng + ?Sized>(&self, a: f64, rng: &mut R) -> f64 {
+        let r = self.params.radius(rng.random());
+        wrap(if rng.random::<f64>() < 0.5 {
+            a + r
+        } else {
+            a - r
+        })
     }
 
     /// Log density of moving the coordinates of `groups` from `from` to `to` (the product of
@@ -370,8 +365,12 @@ impl PairwiseKelemen {
 impl Proposal<Vec<f64>> for PairwiseKelemen {
     fn propose<R: Rng + ?Sized>(&self, x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut R) -> Proposed {
         y.clone_from(x);
-        let layout = PairLayout::single_stream(x.len());
-        self.perturb(layout.groups(1), |i| x[i], |i, v| y[i] = v, rng);
+        for group in PairLayout::single_stream(x.len()).groups(1) {
+            match group {
+                Group::Pair(a, b) => [y[a], y[b]] = self.perturb_pair([x[a], x[b]], rng),
+                Group::Single(a) => y[a] = self.perturb_single(x[a], rng),
+            }
+        }
         Proposed::symmetric()
     }
 
