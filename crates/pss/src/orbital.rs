@@ -22,15 +22,18 @@
 //!
 //! Coordinates pair up per stream: a stream's numbers `(2k, 2k + 1)` form a pair
 //! ([`crate::PairLayout`]; on a plain vector, `(0, 1), (2, 3), ...` as in the paper). For the
-//! renderer's streams (`render::sampler::Stream`) this pairs every 2-D sample drawn at an even
-//! position of its stream: on the camera stream the raster position `(0, 1)` and the lens
-//! `(2, 3)`. Later 2-D samples (light position, BSDF direction) are natural pairs only if
-//! they also start at an even position; in the current PT order (time 1, then 7 numbers per
-//! bounce: light choice, light position 2, lobe, direction 2, roulette) and BDPT order (light
-//! stream: choice, position 2, direction 2; then 3 or 4 per bounce), every other one is split
-//! across two pairs. That stays exact (any partition into pairs and lone coordinates
-//! does) but is less natural; a renderer that wants all pairs natural pads each 2-D sample
-//! to an even position with one unused number.
+//! renderer's streams (`render::sampler::Stream`; `render::mlt` reads PSS stream s as
+//! renderer stream s) this pairs every 2-D sample that starts at an even position of its
+//! stream. In the current orders (PT camera stream: raster 2, lens 2, time 1, then 7 per
+//! bounce: light choice, light position 2, lobe, direction 2, roulette; BDPT camera stream:
+//! raster 2, lens 2, time 1, then lobe and direction 2 per bounce, +1 with roulette; BDPT
+//! light stream: light choice, position 2, direction 2, then the same per bounce; MMLT's
+//! connection stream starts with the strategy choice) the raster position `(0, 1)` and the
+//! lens `(2, 3)` pair naturally, the light's position and direction are each split across
+//! two pairs, and bounce directions alternate between natural and split pairs. That stays
+//! exact (any partition into pairs and lone coordinates does) but is less natural; a
+//! renderer that wants every 2-D sample paired pads it to an even position with one unused
+//! number.
 //!
 //! # Odd dimensions
 //!
@@ -38,8 +41,8 @@
 //! step with the same radius law (random sign); stage 2 keeps it at `x`'s value. Both keep
 //! eq. 11 exact: `|y_i - z_i| = |y_i - x_i|`, and "stay" is its own reverse. (The authors'
 //! code instead rounds every dimension up to even, except for one sampler where an odd
-//! dimension indexes past the end.) Stage 2 also keeps every coordinate outside its stream
-//! mask at `x`'s value, for the same reason.
+//! dimension indexes past the end.) Any other coordinate stage 2 does not move stays at
+//! `x`'s value, for the same reason.
 //!
 //! # The torus
 //!
