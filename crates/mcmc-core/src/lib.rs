@@ -30,6 +30,7 @@
 
 mod chain;
 pub mod controller;
+pub mod delayed_rejection;
 mod error;
 mod kernel;
 mod mh;
@@ -54,6 +55,7 @@ pub use rand;
 /// seeded from (seed, chain index)); re-exported so users need not depend on `rand_pcg`.
 pub type ChainRng = rand_pcg::Pcg64;
 pub use controller::{Controller, NoAdaptation};
+pub use delayed_rejection::{DelayedRejection, DrRule, Euclidean, NoGhost, StateArithmetic, Torus};
 pub use error::McmcError;
 pub use kernel::{
     accept_prob_from_log_ratio, mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo,

@@ -20,6 +20,28 @@ pub struct AcceptanceStats {
     pub stage_accepted: [u64; MAX_STAGES],
     /// Steps with a non-finite density or Hastings term.
     pub non_finite: u64,
+    /// Summed acceptance probability per stage (over the steps that tried the stage): with
+    /// [`AcceptanceStats::stage_tried`], the mean `a1` and the mean `a2` of a
+    /// delayed-rejection kernel (its "DR stage map" statistics).
+    pub stage_accept_prob_sum: [f64; MAX_STAGES],
+    /// Summed [`move_probability`] per first-stage component: the mean over a component's
+    /// steps estimates the probability that such a step moves the chain (for delayed
+    /// rejection `E[a1 + (1 - a1) a2]`, the two-stage `eta_s` of automatic large-step
+    /// control; for MH the same as [`AcceptanceStats::accept_prob_sum`]).
+    pub move_prob_sum: [f64; MAX_COMPONENTS],
+}
+
+/// An unbiased one-step estimate of the probability that a step moves the chain:
+/// `a1 + a2` from [`StepInfo::accept_prob`] (`a2 = 0` when no second stage ran).
+///
+/// For MH it is `a1`. For two-stage delayed rejection the second stage runs only after a
+/// first-stage rejection (probability `1 - a1`), so `E[a1 + 1{second stage} a2] =
+/// E[a1 + (1 - a1) a2]`, the probability of moving at either stage. A single value may
+/// exceed 1 (a rejected `y` with large `a1` followed by an accepted `z`); its mean may not.
+/// This is what `eta_s` means for a delayed-rejection small step (docs/methods/drmlt.md).
+#[must_use]
+pub fn move_probability(info: &StepInfo) -> f64 {
+    info.accept_prob.iter().sum()
 }
 
 impl AcceptanceStats {
@@ -35,7 +57,9 @@ impl AcceptanceStats {
         }
         for s in 0..usize::from(info.stages_tried).min(MAX_STAGES) {
             self.stage_tried[s] += 1;
+            self.stage_accept_prob_sum[s] += info.accept_prob[s];
         }
+        self.move_prob_sum[c] += move_probability(info);
         self.non_finite += u64::from(info.non_finite);
     }
 
@@ -58,6 +82,27 @@ impl AcceptanceStats {
         ratio(self.stage_accepted[s] as f64, self.stage_tried[s])
     }
 
+    /// Mean acceptance probability at stage `s` (0-based) among the steps that tried it.
+    #[must_use]
+    pub fn stage_mean_accept_prob(&self, s: usize) -> f64 {
+        ratio(self.stage_accept_prob_sum[s], self.stage_tried[s])
+    }
+
+    /// Mean [`move_probability`] of the steps that started with component `j`.
+    #[must_use]
+    pub fn component_move_probability(&self, j: usize) -> f64 {
+        ratio(self.move_prob_sum[j], self.proposed[j])
+    }
+
+    /// The share of accepted moves made at the second stage, `accepted_2 / (accepted_1 +
+    /// accepted_2)` (0 without accepted moves): the per-pixel quantity of the DR paper's
+    /// stage maps (Fig. 1, 9).
+    #[must_use]
+    pub fn second_stage_share(&self) -> f64 {
+        let total = self.stage_accepted.iter().sum::<u64>();
+        ratio(self.stage_accepted[MAX_STAGES - 1] as f64, total)
+    }
+
     /// Adds another chain's counts.
     pub fn merge(&mut self, other: &Self) {
         self.steps += other.steps;
@@ -65,10 +110,12 @@ impl AcceptanceStats {
             self.proposed[j] += other.proposed[j];
             self.accepted[j] += other.accepted[j];
             self.accept_prob_sum[j] += other.accept_prob_sum[j];
+            self.move_prob_sum[j] += other.move_prob_sum[j];
         }
         for s in 0..MAX_STAGES {
             self.stage_tried[s] += other.stage_tried[s];
             self.stage_accepted[s] += other.stage_accepted[s];
+            self.stage_accept_prob_sum[s] += other.stage_accept_prob_sum[s];
         }
         self.non_finite += other.non_finite;
     }
@@ -129,6 +176,32 @@ pub fn effective_sample_size(series: &[f64]) -> f64 {
 mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
+
+    /// Per-stage sums and the move probability of a two-stage step (`a1 + a2`), merged.
+    #[test]
+    fn records_stage_statistics() {
+        let mut two = StepInfo::new(0);
+        two.stages_tried = 2;
+        two.accept_prob = [0.25, 0.5];
+        two.accepted_stage = 2;
+        let mut one = StepInfo::new(1);
+        one.stages_tried = 1;
+        one.accept_prob = [0.75, 0.0];
+        one.accepted_stage = 1;
+        let mut a = AcceptanceStats::default();
+        a.record(&two);
+        let mut b = AcceptanceStats::default();
+        b.record(&one);
+        a.merge(&b);
+        assert_eq!(move_probability(&two), 0.75);
+        assert_eq!(a.stage_accept_prob_sum, [1.0, 0.5]);
+        assert_eq!(a.stage_mean_accept_prob(0), 0.5);
+        assert_eq!(a.stage_mean_accept_prob(1), 0.5);
+        assert_eq!(a.component_move_probability(0), 0.75);
+        assert_eq!(a.component_move_probability(1), 0.75);
+        assert_eq!(a.second_stage_share(), 0.5);
+        assert_eq!(AcceptanceStats::default().second_stage_share(), 0.0);
+    }
 
     #[test]
     fn iid_series_has_tau_near_one() {

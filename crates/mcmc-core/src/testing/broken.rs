@@ -287,3 +287,74 @@ impl<T: Target, K: Kernel<T>> Kernel<T> for SplatFinalState<K> {
         self.0.reverse_path(target, path)
     }
 }
+
+/// Runs a two-stage kernel unchanged but splats with the DR paper's weights (Fig. 8,
+/// section 4.6): `w_y = a1`, `w_z = (1 - a1) a2`, `w_x = 1 - w_y - w_z`, where `a2 = 0` when
+/// no second stage ran (the reference implementation's `SplatList` weights).
+///
+/// The bug: those are the probabilities of the three outcomes *before* `y`'s fate is known,
+/// but `z` (and `a2`) exist only after a rejection of `y`. One step then splats, in
+/// expectation, `a1 h(y) + (1 - a1) [(1 - a1) a2 h(z) + (1 - (1 - a1) a2) h(x)] + a1 (1 - a1)
+/// h(x)` instead of `a1 h(y) + (1 - a1) [a2 h(z) + (1 - a2) h(x)]`: weight moves from the
+/// second-stage candidates to the current state, which the splat-weight check
+/// ([`super::splat_weight_test`]) sees (docs/methods/drmlt.md has the numbers). The chain's
+/// states are unaffected.
+///
+/// The samples are found by the layout [`crate::DelayedRejection`] (and [`crate::Mh`])
+/// keep: the stage-`s` candidate is proposed into `scratch[s - 1]` and acceptance is a swap,
+/// so after the step the old current state is in `scratch[accepted_stage - 1]` if a
+/// candidate was accepted.
+#[derive(Clone, Debug)]
+pub struct PaperSplatWeights<K>(pub K);
+
+impl<T: Target, K: Kernel<T>> Kernel<T> for PaperSplatWeights<K> {
+    fn stages(&self) -> usize {
+        self.0.stages()
+    }
+
+    fn step<R, O>(
+        &mut self,
+        target: &T,
+        current: &mut SampleOf<T>,
+        scratch: &mut [SampleOf<T>],
+        rng: &mut R,
+        observer: &mut O,
+    ) -> StepInfo
+    where
+        R: Rng + ?Sized,
+        O: Observer<T::State, T::Payload> + ?Sized,
+    {
+        let info = self.0.step(target, current, scratch, rng, &mut ());
+        let a1 = info.accept_prob[0];
+        let a2 = if info.stages_tried >= 2 {
+            info.accept_prob[1]
+        } else {
+            0.0
+        };
+        let (w_y, w_z) = (a1, (1.0 - a1) * a2);
+        let w_x = 1.0 - w_y - w_z;
+        // Where x, y and z are after the step.
+        let (x, y, z) = match info.accepted_stage {
+            0 => (&*current, &scratch[0], &scratch[1]),
+            1 => (&scratch[0], &*current, &scratch[1]),
+            _ => (&scratch[1], &scratch[0], &*current),
+        };
+        if w_y > 0.0 {
+            observer.splat(y, w_y);
+        }
+        if w_z > 0.0 {
+            observer.splat(z, w_z);
+        }
+        observer.splat(x, w_x);
+        observer.step(&info);
+        info
+    }
+
+    fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
+        self.0.log_flow(target, path)
+    }
+
+    fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
+        self.0.reverse_path(target, path)
+    }
+}

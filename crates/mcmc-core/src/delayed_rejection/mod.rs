@@ -1,0 +1,23 @@
+//! Two-stage delayed rejection: the kernel, its three acceptance rules, the ghost-state
+//! arithmetic, and pairwise stages on `Vec<f64>` (DR paper, section 4; docs/methods/drmlt.md).
+//!
+//! | item | what it is |
+//! |---|---|
+//! | [`DelayedRejection`] | the kernel: first-stage [`crate::Proposal`], second-stage [`crate::proposal::ConditionalProposal`] |
+//! | [`DrRule`] | Tierney-Mira (eq. 6/7), Green-Mira (eq. 12-14), orbital (eq. 11) |
+//! | [`StateArithmetic`], [`Euclidean`], [`Torus`], [`NoGhost`] | the ghost `y* = z - (y - x)` of Green-Mira |
+//! | [`RadialKelemen`], [`OrbitalWalk`], [`WrappedCauchy`] | the pairwise polar Kelemen first stage and the orbital second stage (section 4.4) |
+//! | [`IndependentSecondStage`], [`WrappedGaussianWalk`] | a second stage that ignores `y`; a Gaussian walk on the torus |
+
+mod arithmetic;
+mod kernel;
+mod proposals;
+mod rule;
+
+pub use arithmetic::{Euclidean, NoGhost, StateArithmetic, Torus};
+pub use kernel::DelayedRejection;
+pub use proposals::{
+    IndependentSecondStage, OrbitalWalk, RadialKelemen, WrappedCauchy, WrappedGaussianWalk,
+    ORBIT_TOLERANCE,
+};
+pub use rule::DrRule;
