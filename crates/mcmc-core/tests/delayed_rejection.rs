@@ -41,7 +41,7 @@ use mcmc_core::delayed_rejection::{
     IndependentSecondStage, OrbitalWalk, RadialKelemen, WrappedCauchy, WrappedGaussianWalk,
 };
 use mcmc_core::proposal::{ConditionalProposal, FixedSelection};
-use mcmc_core::stats::integrated_autocorrelation_time;
+use mcmc_core::stats::{integrated_autocorrelation_time, AcceptanceStats};
 use mcmc_core::testing::broken::PaperSplatWeights;
 use mcmc_core::testing::{
     assert_finite_state_balance, assert_pairwise_balance, assert_path_balance, finite_state_check,
@@ -815,10 +815,14 @@ fn tierney_mira_vanishes_where_the_orbital_rule_does_not() {
 
 /// Integrated autocorrelation times of `x` and of `1[x < 0]` (the spike) over `chains`
 /// independent chains from exact starts, and the acceptance rate.
-fn iats<K: Kernel<UniformMixture> + Clone>(kernel: &K, seed: u64) -> (Vec<f64>, Vec<f64>, f64) {
+fn iats<K: Kernel<UniformMixture> + Clone>(
+    kernel: &K,
+    seed: u64,
+) -> (Vec<f64>, Vec<f64>, AcceptanceStats) {
     let target = UniformMixture::rioux_lavoie2020();
     let (chains, steps) = (16u64, 50_000usize);
-    let (mut tau_x, mut tau_spike, mut acc) = (Vec::new(), Vec::new(), 0.0);
+    let (mut tau_x, mut tau_spike) = (Vec::new(), Vec::new());
+    let mut stats = AcceptanceStats::default();
     for i in 0..chains {
         let mut rng = Pcg64::seed_from_u64(mcmc_core::seed::chain_seed(seed, i));
         let x0 = target.sample_exact(&mut rng);
@@ -831,9 +835,9 @@ fn iats<K: Kernel<UniformMixture> + Clone>(kernel: &K, seed: u64) -> (Vec<f64>, 
         }
         tau_x.push(integrated_autocorrelation_time(&xs));
         tau_spike.push(integrated_autocorrelation_time(&spike));
-        acc += chain.stats().acceptance_rate() / chains as f64;
+        stats.merge(chain.stats());
     }
-    (tau_x, tau_spike, acc)
+    (tau_x, tau_spike, stats)
 }
 
 /// Fig. 3: MH with a large sigma (beta = 1, the plateau), MH with a small sigma (alpha = 1/10,
@@ -856,8 +860,19 @@ fn delayed_rejection_mixes_faster_on_the_fig3_toy() {
     ] {
         let (x, s) = (mean_and_se(&r.0), mean_and_se(&r.1));
         eprintln!(
-            "Fig. 3 toy, {name}: acceptance {:.3}, IAT(x) {:.1} +- {:.1}, IAT(1[x<0]) {:.1} +- {:.1}",
-            r.2, x.0, x.1, s.0, s.1
+            "Fig. 3 toy, {name}: acceptance {:.3} (stage 1 {:.3}, stage 2 {:.3} of {:.1}% of \
+             steps; mean a1 {:.3}, mean a2 {:.3}), IAT(x) {:.1} +- {:.1}, IAT(1[x<0]) {:.1} +- \
+             {:.1}",
+            r.2.acceptance_rate(),
+            r.2.stage_acceptance_rate(0),
+            r.2.stage_acceptance_rate(1),
+            100.0 * r.2.stage_tried[1] as f64 / r.2.steps as f64,
+            r.2.stage_mean_accept_prob(0),
+            r.2.stage_mean_accept_prob(1),
+            x.0,
+            x.1,
+            s.0,
+            s.1
         );
     }
     assert_greater(
