@@ -26,6 +26,7 @@ mod error;
 mod fresh;
 mod mutation;
 pub mod noise;
+mod on_layout;
 pub mod orbital;
 mod pairwise;
 mod proposal;
@@ -37,6 +38,7 @@ mod wrapped_cauchy;
 pub use error::PssError;
 pub use fresh::FreshPss;
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
+pub use on_layout::{OnLayout, PairwiseMltProposal};
 pub use orbital::Orbital;
 pub use pairwise::{
     torus_displacement, Group, PairLayout, PairwiseKelemen, PairwiseKelemenParams,

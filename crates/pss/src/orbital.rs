@@ -75,10 +75,12 @@
 //!
 //! The orbit needs `x` and `y` at every coordinate `z` reads, so both stages work on states
 //! materialised to a fixed layout (as the authors' code does), never on lazily grown ones:
-//! here `Vec<f64>` points of `[0, 1)^n`, whose length is the layout
-//! ([`PairLayout::single_stream`]). Both stages are symmetric only because the layout does
-//! not depend on the state: a layout that grew with what `x` has read would perturb
-//! coordinates in one direction that the reverse move leaves alone.
+//! `Vec<f64>` points of `[0, 1)^n`, whose length is the layout
+//! ([`PairLayout::single_stream`]), and [`crate::PssState`]s through [`crate::OnLayout`],
+//! which materialises a given [`PairLayout`] exactly (its docs say how the lazy state's
+//! catch-up and `absorb_rejected` are kept). Both stages are symmetric only because the
+//! layout does not depend on the state: a layout that grew with what `x` has read would
+//! perturb coordinates in one direction that the reverse move leaves alone.
 
 use std::f64::consts::PI;
 

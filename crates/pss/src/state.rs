@@ -350,6 +350,20 @@ impl PssState {
         }
     }
 
+    /// Stores `value` (wrapped into `[0, 1)`) as coordinate `index` (interleaved numbering),
+    /// up to date at the state's current iteration, growing the state if needed: for
+    /// proposals that compute whole coordinates rather than attach a lazy mutation (the
+    /// pairwise stages of delayed rejection, which first read the parent's value with
+    /// [`PssState::get`] on the candidate, so that catch-up draws are logged as usual).
+    pub fn set(&mut self, index: usize, value: f64) {
+        if index >= self.values.len() {
+            self.values.resize(index + 1, 0.0);
+            self.stamps.resize(index + 1, NEVER);
+        }
+        self.values[index] = crate::mutation::wrap(value);
+        self.stamps[index] = self.iteration[index % self.streams];
+    }
+
     /// Brings every stored coordinate up to date (eager evaluation of the pending mutation).
     pub fn materialize(&mut self) {
         for i in 0..self.values.len() {
