@@ -167,3 +167,21 @@ pub(crate) fn env_strength(text: &str) -> Result<f32, String> {
         )),
     }
 }
+
+/// Parses `--dr-variant`.
+pub(crate) fn dr_variant(text: &str) -> Result<render::mlt::dr::DrVariant, String> {
+    render::mlt::dr::DrVariant::ALL
+        .iter()
+        .find(|(name, _)| name.eq_ignore_ascii_case(text.trim()))
+        .map(|&(_, v)| v)
+        .ok_or_else(|| format!("expected tierney-mira, green-mira or orbital, got '{text}'"))
+}
+
+/// Parses `--dr-on`.
+pub(crate) fn dr_on(text: &str) -> Result<render::mlt::dr::DrBase, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "pssmlt" => Ok(render::mlt::dr::DrBase::Pssmlt),
+        "mmlt" => Ok(render::mlt::dr::DrBase::Mmlt),
+        _ => Err(format!("expected pssmlt or mmlt, got '{text}'")),
+    }
+}

@@ -9,6 +9,7 @@ use pss::SmallMutation;
 use render::image_io;
 use render::integrator::{IntegratorKind, INTEGRATORS};
 use render::light::EnvironmentLight;
+use render::mlt::dr::{DrBase, DrVariant};
 use render::mlt::LargeStepMode;
 use render::scene::{LoadOptions, Scene};
 use render::session::{self, Budget, McmcSettings, RenderOutput, RenderSettings};
@@ -98,6 +99,13 @@ pub(crate) struct RenderArgs {
     /// Exposure of the PNG preview in stops, -64..=64 (the EXR is never scaled).
     #[arg(long, allow_negative_numbers = true, value_name = "STOPS", default_value = "0", value_parser = parse::stops)]
     exposure: f32,
+    /// drmlt: the second-stage rule, `tierney-mira`, `green-mira` or `orbital` (the paper's
+    /// recommendation).
+    #[arg(long, value_name = "RULE", default_value = "orbital", value_parser = parse::dr_variant)]
+    dr_variant: DrVariant,
+    /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).
+    #[arg(long, value_name = "pssmlt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
+    dr_on: DrBase,
     /// Environment light: `none`, a radiance `R,G,B` or grey `V` (each in 0..=1e6), or an
     /// equirectangular map (.exr, .hdr, .pfm; +Y up, image centre towards -Z) [default: the
     /// scene's lights; a scene without any light gets a uniform environment of radiance 1].
@@ -216,6 +224,8 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             chains: args.chains as usize,
             bootstrap_samples: args.bootstrap_samples as usize,
             small_step: args.small_step,
+            dr_variant: args.dr_variant,
+            dr_on: args.dr_on,
         },
         strategy_images: args.strategy_images,
     }

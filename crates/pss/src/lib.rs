@@ -38,7 +38,7 @@ mod wrapped_cauchy;
 pub use error::PssError;
 pub use fresh::FreshPss;
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
-pub use on_layout::{OnLayout, PairwiseMltProposal};
+pub use on_layout::{LayoutGhost, OnLayout, PairwiseMltProposal};
 pub use orbital::Orbital;
 pub use pairwise::{
     torus_displacement, Group, PairLayout, PairwiseKelemen, PairwiseKelemenParams,

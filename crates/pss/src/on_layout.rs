@@ -378,3 +378,45 @@ mod tests {
         assert!(p.is_large_step(1) && !p.is_large_step(0));
     }
 }
+
+/// Green-Mira's fictional state on a layout (DR paper eq. 12-14): `y* = z - (y - x)` per
+/// coordinate of `layout` in the streams of `stream_mask`, with the minimal torus
+/// displacement `d(x, y)` and the result wrapped to `[0, 1)`; every other coordinate is
+/// `x`'s (as for the stages, which keep them). Exact for states materialised on the layout
+/// (what [`OnLayout`] stages produce). The ghost is a copy of `x` with the identity pending
+/// mutation, so the target can evaluate it; it is never splatted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LayoutGhost {
+    /// The coordinates the stages move.
+    pub layout: PairLayout,
+    /// Streams the stages move.
+    pub stream_mask: u8,
+}
+
+impl mcmc_core::StateArithmetic<PssState> for LayoutGhost {
+    fn ghost(&self, x: &PssState, y: &PssState, z: &PssState, out: &mut PssState) {
+        out.clone_from(x);
+        out.set_pending(
+            Pending::Small {
+                mutation: SmallMutation::Kelemen(KelemenParams::kelemen2002()),
+                stream_mask: 0,
+            },
+            z.key().rotate_left(17) ^ 0x5851_f42d_4c95_7f2d,
+        );
+        let mut put = |i: usize| {
+            let v = stored(z, i) - torus_displacement(stored(x, i), stored(y, i));
+            if v.is_finite() {
+                out.set(i, crate::wrap(v));
+            }
+        };
+        for group in self.layout.groups(self.stream_mask) {
+            match group {
+                Group::Pair(a, b) => {
+                    put(a);
+                    put(b);
+                }
+                Group::Single(a) => put(a),
+            }
+        }
+    }
+}

@@ -71,6 +71,25 @@ impl Frame {
     }
 }
 
+/// True if the shading normal `ns` and the geometric normal `ng` agree on whether light going
+/// from `wi` to `wo` is reflected (both on one side) or transmitted: the check pbrt-v3's
+/// `BSDF::f` makes with the geometric normal. Where they disagree a BSDF evaluated in the
+/// shading frame would let light through an opaque surface (or reflect it off a refractive
+/// one): interpolated normals on a coarse sphere leak the environment into a closed room
+/// without it. Integrators treat such directions as carrying no light.
+#[inline]
+#[must_use]
+pub fn shading_consistent(
+    wo: glam::Vec3A,
+    wi: glam::Vec3A,
+    ng: glam::Vec3A,
+    ns: glam::Vec3A,
+) -> bool {
+    let geometric = wo.dot(ng) * wi.dot(ng);
+    let shading = wo.dot(ns) * wi.dot(ns);
+    geometric != 0.0 && (geometric > 0.0) == (shading > 0.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -133,23 +152,4 @@ mod tests {
         // Degenerate tangent falls back to the normal-only construction.
         assert_eq!(Frame::from_normal_tangent(n, n), Frame::from_normal(n));
     }
-}
-
-/// True if the shading normal `ns` and the geometric normal `ng` agree on whether light going
-/// from `wi` to `wo` is reflected (both on one side) or transmitted: the check pbrt-v3's
-/// `BSDF::f` makes with the geometric normal. Where they disagree a BSDF evaluated in the
-/// shading frame would let light through an opaque surface (or reflect it off a refractive
-/// one): interpolated normals on a coarse sphere leak the environment into a closed room
-/// without it. Integrators treat such directions as carrying no light.
-#[inline]
-#[must_use]
-pub fn shading_consistent(
-    wo: glam::Vec3A,
-    wi: glam::Vec3A,
-    ng: glam::Vec3A,
-    ns: glam::Vec3A,
-) -> bool {
-    let geometric = wo.dot(ng) * wi.dot(ng);
-    let shading = wo.dot(ns) * wi.dot(ns);
-    geometric != 0.0 && (geometric > 0.0) == (shading > 0.0)
 }

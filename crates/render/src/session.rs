@@ -17,6 +17,8 @@ use crate::scene::Scene;
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 
+use crate::mlt::dr::{self, DrBase, DrVariant};
+
 /// Which integrator renders the image: defined with the integrator table.
 pub use crate::integrator::IntegratorKind;
 
@@ -33,6 +35,10 @@ pub struct McmcSettings {
     pub bootstrap_samples: usize,
     /// The small-step kernel (default Kelemen with s1 = 1/1024, s2 = 1/64).
     pub small_step: SmallMutation,
+    /// Delayed-rejection MLT: the second-stage rule (default orbital).
+    pub dr_variant: DrVariant,
+    /// Delayed-rejection MLT: the path sampler (default PSSMLT).
+    pub dr_on: DrBase,
 }
 
 impl Default for McmcSettings {
@@ -42,6 +48,8 @@ impl Default for McmcSettings {
             chains: 256,
             bootstrap_samples: 100_000,
             small_step: SmallMutation::Kelemen(KelemenParams::kelemen2002()),
+            dr_variant: DrVariant::Orbital,
+            dr_on: DrBase::Pssmlt,
         }
     }
 }
@@ -204,7 +212,10 @@ pub fn render(
         IntegratorKind::Pt => {
             Ok(pool.install(|| render_pt(scene, settings, start, progress, cancel)))
         }
-        IntegratorKind::Bdpt | IntegratorKind::Pssmlt | IntegratorKind::Mmlt => {
+        IntegratorKind::Bdpt
+        | IntegratorKind::Pssmlt
+        | IntegratorKind::Mmlt
+        | IntegratorKind::Drmlt => {
             // BDPT and the MCMC targets use the scene's camera: set it to the image size.
             let mut sized;
             let scene = if (scene.camera().width(), scene.camera().height())
@@ -338,7 +349,44 @@ fn render_bidirectional(
                 .unwrap_or_else(|_| unreachable!("clamped")),
         )
     };
-    let out = if settings.integrator == IntegratorKind::Mmlt {
+    let out = if settings.integrator == IntegratorKind::Drmlt {
+        let layout = dr::dr_layout(settings.max_depth);
+        let base = m.dr_on;
+        notes.push(format!(
+            "delayed rejection: {} second stage on {}",
+            m.dr_variant.name(),
+            match base {
+                DrBase::Pssmlt => "PSSMLT",
+                DrBase::Mmlt => "MMLT (camera subpath only)",
+            }
+        ));
+        match base {
+            DrBase::Mmlt => {
+                let targets = MmltTarget::all_depths(scene, params, w, h);
+                render_dr(
+                    &targets,
+                    m.dr_variant,
+                    layout,
+                    base,
+                    &mlt_settings,
+                    progress,
+                    cancel,
+                )
+            }
+            DrBase::Pssmlt => {
+                let targets = [PssmltTarget::new(scene, params, w, h)];
+                render_dr(
+                    &targets,
+                    m.dr_variant,
+                    layout,
+                    base,
+                    &mlt_settings,
+                    progress,
+                    cancel,
+                )
+            }
+        }
+    } else if settings.integrator == IntegratorKind::Mmlt {
         let targets = MmltTarget::all_depths(scene, params, w, h);
         mlt::render_mlt(&targets, kernel, &mlt_settings, progress, cancel)
     } else {
@@ -394,6 +442,45 @@ pub fn render_cornell_box(size: u32, spp: u32, seed: u64) -> Result<Image, Rende
         ..RenderSettings::default()
     };
     Ok(render(&scene, &settings, &NoProgress, &AtomicBool::new(false))?.image)
+}
+
+/// Delayed-rejection MLT over `targets` with the kernel of `variant` (`mlt::dr`).
+fn render_dr<T>(
+    targets: &[T],
+    variant: DrVariant,
+    layout: pss::PairLayout,
+    base: DrBase,
+    mlt_settings: &MltSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> mlt::MltOutput
+where
+    T: mcmc_core::Target<State = pss::PssState>,
+    T::Payload: mcmc_core::render_loop::SplatPayload,
+{
+    match variant {
+        DrVariant::Orbital => mlt::render_mlt(
+            targets,
+            |p| dr::orbital_kernel(layout, base, p),
+            mlt_settings,
+            progress,
+            cancel,
+        ),
+        DrVariant::TierneyMira => mlt::render_mlt(
+            targets,
+            |p| dr::tierney_mira_kernel(layout, base, p),
+            mlt_settings,
+            progress,
+            cancel,
+        ),
+        DrVariant::GreenMira => mlt::render_mlt(
+            targets,
+            |p| dr::green_mira_kernel(layout, base, p),
+            mlt_settings,
+            progress,
+            cancel,
+        ),
+    }
 }
 
 #[cfg(test)]

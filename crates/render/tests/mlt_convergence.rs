@@ -45,6 +45,7 @@ use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
 use render::metrics::{relmse, RELMSE_EPSILON};
+use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::{
     render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget, PssmltTarget,
     PATH_STREAMS,
@@ -157,6 +158,10 @@ fn t_quantiles_match_tables() {
 enum Method {
     Pssmlt,
     Mmlt,
+    /// Delayed-rejection MLT over PSSMLT (`render::mlt::dr`).
+    Dr(DrVariant),
+    /// Delayed-rejection MLT over MMLT, orbital second stage on the camera subpath.
+    DrMmlt,
 }
 
 fn kernel(p: f64) -> Mh<PssmltProposal> {
@@ -195,6 +200,44 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             &NoProgress,
             &cancel,
         ),
+        Method::Dr(variant) => {
+            let targets = [PssmltTarget::new(scene, params, w, h)];
+            let layout = dr::dr_layout(params.max_depth);
+            let base = DrBase::Pssmlt;
+            match variant {
+                DrVariant::Orbital => render_mlt(
+                    &targets,
+                    |p| dr::orbital_kernel(layout, base, p),
+                    settings,
+                    &NoProgress,
+                    &cancel,
+                ),
+                DrVariant::TierneyMira => render_mlt(
+                    &targets,
+                    |p| dr::tierney_mira_kernel(layout, base, p),
+                    settings,
+                    &NoProgress,
+                    &cancel,
+                ),
+                DrVariant::GreenMira => render_mlt(
+                    &targets,
+                    |p| dr::green_mira_kernel(layout, base, p),
+                    settings,
+                    &NoProgress,
+                    &cancel,
+                ),
+            }
+        }
+        Method::DrMmlt => {
+            let layout = dr::dr_layout(params.max_depth);
+            render_mlt(
+                &MmltTarget::all_depths(scene, params, w, h),
+                |p| dr::orbital_kernel(layout, DrBase::Mmlt, p),
+                settings,
+                &NoProgress,
+                &cancel,
+            )
+        }
     }
 }
 
@@ -316,6 +359,14 @@ fn pssmlt_matches_the_analytic_enclosure() {
 #[test]
 fn mmlt_matches_the_analytic_enclosure() {
     enclosure_case(Method::Mmlt, 2000);
+}
+
+#[test]
+fn drmlt_variants_match_the_analytic_enclosure() {
+    enclosure_case(Method::Dr(DrVariant::Orbital), 5000);
+    enclosure_case(Method::Dr(DrVariant::TierneyMira), 6000);
+    enclosure_case(Method::Dr(DrVariant::GreenMira), 7000);
+    enclosure_case(Method::DrMmlt, 8000);
 }
 
 /// MMLT's per-depth targets: in the enclosure every path of depth `d` carries `Le rho^d`, and
@@ -515,6 +566,22 @@ fn mmlt_converges_to_bdpt_on_the_cornell_box() {
     cornell_case(Method::Mmlt, 4000, MMLT_MPP);
 }
 
+#[test]
+fn drmlt_orbital_converges_to_bdpt_on_the_cornell_box() {
+    cornell_case(Method::Dr(DrVariant::Orbital), 5000, PSSMLT_MPP);
+}
+
+#[test]
+fn drmlt_tierney_mira_and_green_mira_converge_to_bdpt_on_the_cornell_box() {
+    cornell_case(Method::Dr(DrVariant::TierneyMira), 6000, PSSMLT_MPP);
+    cornell_case(Method::Dr(DrVariant::GreenMira), 7000, PSSMLT_MPP);
+}
+
+#[test]
+fn drmlt_on_mmlt_converges_to_bdpt_on_the_cornell_box() {
+    cornell_case(Method::DrMmlt, 8000, MMLT_MPP);
+}
+
 // ---------------------------------------------------------------------------------------------
 // 3. Negative control: the same block test detects a wrong max depth.
 
@@ -657,7 +724,12 @@ fn same_seed_gives_identical_bytes_with_one_and_two_threads() {
     std::fs::create_dir_all(&dir).unwrap();
     let bits =
         |im: &Image| -> Vec<u32> { im.pixels.iter().flat_map(|p| p.map(f32::to_bits)).collect() };
-    for method in [Method::Pssmlt, Method::Mmlt] {
+    for method in [
+        Method::Pssmlt,
+        Method::Mmlt,
+        Method::Dr(DrVariant::GreenMira),
+        Method::DrMmlt,
+    ] {
         let mut s = settings(scene, 42, 16.0);
         if method == Method::Mmlt {
             // Also cover automatic large-step control (statistics pooled over chains).

@@ -82,8 +82,11 @@ impl LargeStepStats {
                 self.large_nonzero += 1;
             }
         } else {
+            // eta_s of a delayed-rejection small step is its probability of moving at either
+            // stage, E[a1 + (1 - a1) a2] (`stats::move_probability`; docs/methods/drmlt.md);
+            // for a one-stage kernel that is a1.
             self.small += 1;
-            self.small_accept += info.accept_prob[0];
+            self.small_accept += crate::stats::move_probability(info);
         }
     }
 

@@ -16,6 +16,9 @@ pub enum IntegratorKind {
     /// Multiplexed MLT (Hachisuka et al. 2014): one BDPT strategy per sample, path length
     /// chosen per chain.
     Mmlt,
+    /// Delayed-rejection MLT (Rioux-Lavoie et al. 2020) over PSSMLT or MMLT
+    /// ([`crate::mlt::dr`]).
+    Drmlt,
 }
 
 /// One row of the integrator table.
@@ -58,6 +61,12 @@ pub const INTEGRATORS: &[IntegratorInfo] = &[
         description: "multiplexed MLT: one BDPT strategy per sample (Hachisuka et al. 2014)",
         is_mcmc: true,
         kind: IntegratorKind::Mmlt,
+    },
+    IntegratorInfo {
+        name: "drmlt",
+        description: "delayed-rejection MLT (Rioux-Lavoie et al. 2020): two-stage bold-then-timid kernels (--dr-variant) over PSSMLT or MMLT (--dr-on)",
+        is_mcmc: true,
+        kind: IntegratorKind::Drmlt,
     },
 ];
 
@@ -119,12 +128,12 @@ mod tests {
         }
         // Every variant has a row; the match has no wildcard arm, so a new variant does not
         // compile here until it is added to `all` (and then needs its row).
-        use IntegratorKind::{Bdpt, Mmlt, Pssmlt, Pt};
-        let all = [Pt, Bdpt, Pssmlt, Mmlt];
+        use IntegratorKind::{Bdpt, Drmlt, Mmlt, Pssmlt, Pt};
+        let all = [Pt, Bdpt, Pssmlt, Mmlt, Drmlt];
         assert_eq!(all.len(), INTEGRATORS.len());
         for kind in all {
             match kind {
-                Pt | Bdpt | Pssmlt | Mmlt => assert_eq!(kind.info().kind, kind),
+                Pt | Bdpt | Pssmlt | Mmlt | Drmlt => assert_eq!(kind.info().kind, kind),
             }
         }
         assert_eq!(INTEGRATORS[0].kind, IntegratorKind::default());

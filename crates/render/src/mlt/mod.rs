@@ -1,6 +1,7 @@
 //! Markov chain Monte Carlo integrators over primary sample space: the path-sampler targets
 //! (PSSMLT over BDPT, MMLT) run through mcmc-core's generic render loop.
 
+pub mod dr;
 mod path_sampler;
 mod run;
 

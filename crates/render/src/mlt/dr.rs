@@ -1,0 +1,190 @@
+//! Delayed-rejection MLT (Rioux-Lavoie et al. 2020, ../shared/papers/delayed-rejection-mlt.txt)
+//! on the path samplers: the kernels of `mcmc_core::delayed_rejection` with the pairwise
+//! primary-sample-space stages of `pss` ([`pss::OnLayout`]).
+//!
+//! Every variant is *bold then timid* (section 5.1) and runs its second stage only after a
+//! rejected small step, never after a large step (the authors' implementation; the mixture
+//! terms are component-labelled, docs/methods/drmlt.md):
+//! - `orbital` (section 4.4, eq. 11): a pairwise polar Kelemen first stage (radii x 1.9, the
+//!   authors' preset) and the orbital second stage (wrapped Cauchy, rho = exp(-1/4));
+//! - `tierney-mira` (eq. 6-7): the same bold first stage, then a timid pairwise Kelemen step
+//!   from `x` with radii / 10 (independent of the rejected `y`; symmetric);
+//! - `green-mira` (eq. 12-14): the same stages with the fictional state `y* = z - (y - x)`
+//!   on the torus ([`pss::LayoutGhost`]).
+//!
+//! On MMLT (`DrBase::Mmlt`, section 5.1.2) the second stage moves only the camera stream:
+//! the light subpath and the strategy choice (the first number of the connection stream) stay
+//! fixed. For light-tracing strategies (t = 1) the camera stream only holds the raster
+//! position, which the connection overrides, so their second stage proposes the same path
+//! (accepted; a wasted evaluation, documented rather than special-cased).
+//!
+//! The pairwise stages move a fixed layout of coordinates per stream, sized from the maximum
+//! path depth to cover what BDPT reads ([`dr_layout`]); coordinates beyond it are renewed by
+//! large steps only (exact, see [`pss::OnLayout`]).
+
+use mcmc_core::delayed_rejection::IndependentSecondStage;
+use mcmc_core::DelayedRejection;
+use pss::{
+    LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseKelemenParams,
+    PairwiseMltProposal, WrappedCauchy,
+};
+
+use super::PATH_STREAMS;
+use crate::sampler::Stream;
+
+/// The acceptance rule of the second stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DrVariant {
+    /// Tierney & Mira 1999 (paper eq. 6-7).
+    TierneyMira,
+    /// Green & Mira 2001 with the fictional state (eq. 12-14).
+    GreenMira,
+    /// The pairwise orbital rule (eq. 11) — the paper's recommended variant.
+    #[default]
+    Orbital,
+}
+
+impl DrVariant {
+    /// The variants with their CLI names.
+    pub const ALL: [(&'static str, DrVariant); 3] = [
+        ("tierney-mira", DrVariant::TierneyMira),
+        ("green-mira", DrVariant::GreenMira),
+        ("orbital", DrVariant::Orbital),
+    ];
+
+    /// The CLI name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(_, v)| *v == self)
+            .map_or("orbital", |(n, _)| n)
+    }
+}
+
+/// The path sampler delayed rejection runs on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DrBase {
+    /// PSSMLT over BDPT (section 5.1.1).
+    #[default]
+    Pssmlt,
+    /// Multiplexed MLT (section 5.1.2): stage 2 on the camera subpath only.
+    Mmlt,
+}
+
+/// Numbers per bounce the layout budgets (BDPT: 3, plus 1 for roulette).
+const PER_BOUNCE: usize = 4;
+
+/// The coordinates the pairwise stages move for paths of at most `max_depth` bounces: camera
+/// stream raster 2 + lens 2 + time 1 + 4 per vertex; light stream light 1 + position 2 +
+/// direction 2 + 4 per vertex; connection stream 3 per strategy of a path length (s = 1 light
+/// samples and t = 1 lens samples) times the lengths. Sizes are rounded up to even so that the
+/// pairs stay (2k, 2k+1).
+#[must_use]
+pub fn dr_layout(max_depth: u32) -> PairLayout {
+    let d = max_depth.min(62) as usize + 2;
+    let even = |n: usize| n + n % 2;
+    let camera = even(5 + PER_BOUNCE * d);
+    let light = even(5 + PER_BOUNCE * d);
+    let connection = even(3 * d * d);
+    let mut dims = [0usize; PATH_STREAMS];
+    dims[Stream::Camera.index()] = camera;
+    dims[Stream::Light.index()] = light;
+    dims[Stream::Connection.index()] = connection;
+    PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
+}
+
+/// The radius scale of the timid second stage of Tierney-Mira and Green-Mira (the authors'
+/// sigma / 10).
+pub const TIMID_SCALE: f64 = 0.1;
+
+/// The bold first stage with large steps of probability `p_large`.
+fn first_stage(layout: PairLayout, p_large: f64) -> PairwiseMltProposal {
+    let small = OnLayout::new(
+        PairwiseKelemen {
+            params: PairwiseKelemenParams::drmlt2020(),
+        },
+        layout,
+    );
+    PairwiseMltProposal::new(small, p_large.clamp(0.0, 1.0))
+        .unwrap_or_else(|_| unreachable!("clamped"))
+}
+
+/// The timid second stage (Tierney-Mira, Green-Mira): a pairwise Kelemen step from `x` with
+/// radii scaled by [`TIMID_SCALE`].
+fn timid_stage(
+    layout: PairLayout,
+    stream_mask: u8,
+) -> IndependentSecondStage<OnLayout<PairwiseKelemen>> {
+    let p = PairwiseKelemenParams::drmlt2020();
+    let params = PairwiseKelemenParams::new(p.r_min * TIMID_SCALE, p.r_max * TIMID_SCALE)
+        .unwrap_or_else(|_| unreachable!("scaled presets stay valid"));
+    IndependentSecondStage(
+        OnLayout::new(PairwiseKelemen { params }, layout).with_stream_mask(stream_mask),
+    )
+}
+
+/// Streams the second stage moves on `base`.
+#[must_use]
+pub fn second_stage_streams(base: DrBase) -> u8 {
+    match base {
+        DrBase::Pssmlt => pss::ALL_STREAMS,
+        DrBase::Mmlt => 1 << Stream::Camera.index(),
+    }
+}
+
+/// The orbital kernel.
+#[must_use]
+pub fn orbital_kernel(
+    layout: PairLayout,
+    base: DrBase,
+    p_large: f64,
+) -> DelayedRejection<PairwiseMltProposal, OnLayout<Orbital>> {
+    let second = OnLayout::new(
+        Orbital {
+            angle: WrappedCauchy::default(),
+        },
+        layout,
+    )
+    .with_stream_mask(second_stage_streams(base));
+    DelayedRejection::orbital(first_stage(layout, p_large), second).second_stage_after_small_steps()
+}
+
+/// The Tierney-Mira kernel.
+#[must_use]
+pub fn tierney_mira_kernel(
+    layout: PairLayout,
+    base: DrBase,
+    p_large: f64,
+) -> DelayedRejection<PairwiseMltProposal, IndependentSecondStage<OnLayout<PairwiseKelemen>>> {
+    DelayedRejection::tierney_mira(
+        first_stage(layout, p_large),
+        timid_stage(layout, second_stage_streams(base)),
+    )
+    .with_symmetric_second_stage()
+    .second_stage_after_small_steps()
+}
+
+/// The Green-Mira kernel.
+#[must_use]
+pub fn green_mira_kernel(
+    layout: PairLayout,
+    base: DrBase,
+    p_large: f64,
+) -> DelayedRejection<
+    PairwiseMltProposal,
+    IndependentSecondStage<OnLayout<PairwiseKelemen>>,
+    LayoutGhost,
+> {
+    let streams = second_stage_streams(base);
+    DelayedRejection::green_mira(
+        first_stage(layout, p_large),
+        timid_stage(layout, streams),
+        LayoutGhost {
+            layout,
+            stream_mask: pss::ALL_STREAMS,
+        },
+    )
+    .with_symmetric_second_stage()
+    .second_stage_after_small_steps()
+}
