@@ -33,10 +33,10 @@ mod proposal;
 mod state;
 #[cfg(feature = "testing")]
 pub mod testing;
-mod wrapped_cauchy;
 
 pub use error::PssError;
 pub use fresh::FreshPss;
+pub use mcmc_core::delayed_rejection::{WrappedCauchy, RIOUX_LAVOIE2020_RHO};
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
 pub use on_layout::{LayoutGhost, OnLayout, PairwiseMltProposal};
 pub use orbital::Orbital;
@@ -46,4 +46,3 @@ pub use pairwise::{
 };
 pub use proposal::{LargeStep, PssmltProposal, SmallStep, ALL_STREAMS};
 pub use state::{Pending, PssState, MAX_STREAMS};
-pub use wrapped_cauchy::{WrappedCauchy, DRMLT2020_RHO};

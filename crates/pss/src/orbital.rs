@@ -90,7 +90,7 @@ use rand::Rng;
 
 use crate::mutation::wrap;
 use crate::pairwise::{torus_displacement, Group, PairLayout};
-use crate::wrapped_cauchy::WrappedCauchy;
+use mcmc_core::delayed_rejection::WrappedCauchy;
 
 /// Relative tolerance of the on-orbit test of [`Orbital`]'s `log_q` (radii recomputed from
 /// wrapped coordinates differ from the drawn one by rounding).

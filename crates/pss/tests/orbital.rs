@@ -43,7 +43,7 @@ use mcmc_core::toy::{wrapped_normal_pdf, Bins, TorusMixture, ToyTarget};
 use mcmc_core::{Kernel, Observer, Proposal, Proposed, SampleOf, StepInfo, Target};
 use pss::{
     torus_displacement, wrap, Orbital, PairwiseKelemen, PairwiseKelemenParams, WrappedCauchy,
-    DRMLT2020_RHO,
+    RIOUX_LAVOIE2020_RHO,
 };
 use rand::{Rng, RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
@@ -165,7 +165,7 @@ fn reference_sampler(rho: f64, rng: &mut Pcg64) -> f64 {
 
 #[test]
 fn wrapped_cauchy_sampler_matches_its_density_and_cdf() {
-    for (i, rho) in [0.3, DRMLT2020_RHO, 0.95].into_iter().enumerate() {
+    for (i, rho) in [0.3, RIOUX_LAVOIE2020_RHO, 0.95].into_iter().enumerate() {
         let wc = WrappedCauchy::new(rho).unwrap();
         let mut samples = wrapped_cauchy_samples(|rng| wc.sample(rng), 100 + i as u64);
         let chi = angle_chi_square(&samples, rho);
@@ -185,9 +185,9 @@ fn wrapped_cauchy_sampler_matches_its_density_and_cdf() {
 
 #[test]
 fn wrapped_cauchy_matches_the_reference_implementation_law() {
-    let wc = WrappedCauchy::drmlt2020();
+    let wc = WrappedCauchy::rioux_lavoie2020();
     let ours = wrapped_cauchy_samples(|rng| wc.sample(rng), 7);
-    let theirs = wrapped_cauchy_samples(|rng| reference_sampler(DRMLT2020_RHO, rng), 8);
+    let theirs = wrapped_cauchy_samples(|rng| reference_sampler(RIOUX_LAVOIE2020_RHO, rng), 8);
     let bin = |s: &[f64]| {
         let mut c = vec![0u64; ANGLE_BINS];
         for &t in s {
@@ -205,7 +205,7 @@ fn wrapped_cauchy_matches_the_reference_implementation_law() {
 
 #[test]
 fn wrapped_cauchy_negative_controls_are_rejected() {
-    let wc = WrappedCauchy::drmlt2020();
+    let wc = WrappedCauchy::rioux_lavoie2020();
     let samples = wrapped_cauchy_samples(|rng| wc.sample(rng), 9);
     // A wrong rho: the default sampler tested against rho = 0.75.
     let wrong_rho = angle_chi_square(&samples, 0.75);
@@ -215,12 +215,12 @@ fn wrapped_cauchy_negative_controls_are_rejected() {
     );
     assert!(wrong_rho.p_value < OVERWHELMING, "{wrong_rho}");
     // A wrong sampler: the quantile without its factor 2 (theta = atan(tan(..) / k)).
-    let inverse_k = (1.0 - DRMLT2020_RHO) / (1.0 + DRMLT2020_RHO);
+    let inverse_k = (1.0 - RIOUX_LAVOIE2020_RHO) / (1.0 + RIOUX_LAVOIE2020_RHO);
     let halved = wrapped_cauchy_samples(
         |rng| (inverse_k * (PI * (rng.random::<f64>() - 0.5)).tan()).atan(),
         10,
     );
-    let wrong_sampler = angle_chi_square(&halved, DRMLT2020_RHO);
+    let wrong_sampler = angle_chi_square(&halved, RIOUX_LAVOIE2020_RHO);
     report(
         "negative control: quantile without its factor 2",
         &wrong_sampler,
@@ -949,7 +949,7 @@ fn orbital_flow_negative_controls_fail() {
     let raw = flow_mismatches(
         &target,
         &PairwiseKelemen::new(wide()),
-        &RawOrbital(WrappedCauchy::drmlt2020()),
+        &RawOrbital(WrappedCauchy::rioux_lavoie2020()),
         TRIPLES,
         73,
     );

@@ -13,11 +13,12 @@ mod arithmetic;
 mod kernel;
 mod proposals;
 mod rule;
+mod wrapped_cauchy;
 
 pub use arithmetic::{Euclidean, NoGhost, StateArithmetic, Torus};
 pub use kernel::DelayedRejection;
 pub use proposals::{
-    IndependentSecondStage, OrbitalWalk, RadialKelemen, WrappedCauchy, WrappedGaussianWalk,
-    ORBIT_TOLERANCE,
+    IndependentSecondStage, OrbitalWalk, RadialKelemen, WrappedGaussianWalk, ORBIT_TOLERANCE,
 };
 pub use rule::DrRule;
+pub use wrapped_cauchy::{WrappedCauchy, RIOUX_LAVOIE2020_RHO};

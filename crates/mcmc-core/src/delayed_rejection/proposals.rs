@@ -5,7 +5,7 @@
 //! mutations of the DR paper's section 4.4 and Alg. 2, on plain vectors in `R^n` or on the
 //! unit torus `[0, 1)^n`, for tests and examples; the `pss` crate has its own for `PssState`.
 
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::TAU;
 
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
@@ -15,53 +15,11 @@ use crate::torus::wrap;
 use crate::toy::wrapped_normal_pdf;
 use crate::McmcError;
 
+use super::wrapped_cauchy::WrappedCauchy;
+
 /// Relative tolerance on `|z - y| = |x - y|` when [`OrbitalWalk::log_q`] decides whether `z`
 /// lies on the orbit (rounding of a rotation is about `1e-16` relative).
 pub const ORBIT_TOLERANCE: f64 = 1e-9;
-
-/// The wrapped Cauchy distribution on the circle (DR paper, eq. 10):
-/// `p(theta) = (1 - rho^2) / (2 pi (1 + rho^2 - 2 rho cos theta))` on `(-pi, pi]`, sampled by
-/// inverting its CDF `F(theta) = 1/2 + atan(((1 + rho) / (1 - rho)) tan(theta / 2)) / pi`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WrappedCauchy {
-    rho: f64,
-}
-
-impl WrappedCauchy {
-    /// Concentration `rho` in `[0, 1)` (0 is uniform; towards 1 a point mass at 0).
-    pub fn new(rho: f64) -> Result<Self, McmcError> {
-        McmcError::check_range("rho", rho, 0.0, 1.0 - f64::EPSILON, "[0, 1)")?;
-        Ok(Self { rho })
-    }
-
-    /// The DR paper's value `rho = exp(-1/4)` (section 5.1.1, used in all its experiments).
-    #[must_use]
-    pub fn rioux_lavoie2020() -> Self {
-        Self {
-            rho: (-0.25f64).exp(),
-        }
-    }
-
-    /// The concentration.
-    #[must_use]
-    pub fn rho(&self) -> f64 {
-        self.rho
-    }
-
-    /// The angle with CDF value `u` in `[0, 1)`: in `(-pi, pi)`.
-    #[must_use]
-    pub fn angle(&self, u: f64) -> f64 {
-        let ratio = (1.0 - self.rho) / (1.0 + self.rho);
-        2.0 * (ratio * (PI * (u - 0.5)).tan()).atan()
-    }
-
-    /// `ln p(theta)` for any real `theta` (periodic).
-    #[must_use]
-    pub fn log_pdf(&self, theta: f64) -> f64 {
-        let r = self.rho;
-        (1.0 - r * r).ln() - (TAU * (1.0 + r * r - 2.0 * r * theta.cos())).ln()
-    }
-}
 
 /// How a pairwise stage measures and applies displacements.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -265,7 +223,7 @@ impl ConditionalProposal<Vec<f64>> for OrbitalWalk {
             let wx = self.space.delta(y[i], x[i]);
             let wy = self.space.delta(y[k], x[k]);
             let r = wx.hypot(wy);
-            let mu = wy.atan2(wx) + self.angle.angle(rng.random::<f64>());
+            let mu = wy.atan2(wx) + self.angle.quantile(rng.random::<f64>());
             if r > 0.0 {
                 z[i] = self.space.place(y[i] + r * mu.cos());
                 z[k] = self.space.place(y[k] + r * mu.sin());
@@ -367,6 +325,7 @@ impl Proposal<Vec<f64>> for WrappedGaussianWalk {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
     use rand::SeedableRng;
 
     #[test]
@@ -396,7 +355,7 @@ mod tests {
         assert!((total - 1.0).abs() < 1e-9, "{total}");
         // CDF by quadrature at a few points vs the sampler's quantiles.
         for &u in &[0.05, 0.3, 0.5, 0.77, 0.99] {
-            let t = wc.angle(u);
+            let t = wc.quantile(u);
             let m = 100_000;
             let w = (t + PI) / m as f64;
             let cdf: f64 = (0..m)

@@ -1,14 +1,15 @@
-//! The wrapped Cauchy distribution on the circle: the angle law of the orbital second stage.
+//! The wrapped Cauchy distribution on the circle: the angle law of the orbital second stage
+//! (one implementation for the toy stages here and the primary-sample-space stages of `pss`).
 
 use std::f64::consts::{PI, TAU};
 
 use rand::{Rng, RngExt};
 
-use crate::PssError;
+use crate::McmcError;
 
 /// `exp(-1/4)`: the concentration the delayed-rejection MLT paper uses in all its orbital
 /// experiments (section 5.1.1), also the authors' code default.
-pub const DRMLT2020_RHO: f64 = 0.778_800_783_071_404_9;
+pub const RIOUX_LAVOIE2020_RHO: f64 = 0.778_800_783_071_404_9;
 
 /// The wrapped Cauchy distribution of an angle `theta` on the circle, with concentration
 /// `rho` in `[0, 1)` (delayed-rejection MLT paper, eq. 10):
@@ -28,9 +29,9 @@ pub const DRMLT2020_RHO: f64 = 0.778_800_783_071_404_9;
 ///
 /// # Example
 /// ```
-/// use pss::WrappedCauchy;
+/// use mcmc_core::delayed_rejection::WrappedCauchy;
 ///
-/// let wc = WrappedCauchy::drmlt2020();
+/// let wc = WrappedCauchy::rioux_lavoie2020();
 /// assert!((wc.cdf(wc.quantile(0.3)) - 0.3).abs() < 1e-12);
 /// assert!(wc.pdf(0.0) > wc.pdf(3.0));
 /// assert!(WrappedCauchy::new(1.0).is_err());
@@ -48,10 +49,10 @@ impl WrappedCauchy {
     /// The distribution with concentration `rho` in `[0, 1)`.
     ///
     /// # Errors
-    /// [`PssError::InvalidParameter`] if `rho` is outside `[0, 1)` or not finite.
-    pub fn new(rho: f64) -> Result<Self, PssError> {
+    /// [`McmcError::InvalidSetting`] if `rho` is outside `[0, 1)` or not finite.
+    pub fn new(rho: f64) -> Result<Self, McmcError> {
         if !(0.0..1.0).contains(&rho) {
-            return Err(PssError::InvalidParameter {
+            return Err(McmcError::InvalidSetting {
                 name: "rho",
                 value: rho.to_string(),
                 allowed: "[0, 1)",
@@ -64,10 +65,10 @@ impl WrappedCauchy {
         })
     }
 
-    /// `rho = exp(-1/4)` ([`DRMLT2020_RHO`]), the paper's value (section 5.1.1).
+    /// `rho = exp(-1/4)` ([`RIOUX_LAVOIE2020_RHO`]), the paper's value (section 5.1.1).
     #[must_use]
-    pub fn drmlt2020() -> Self {
-        Self::new(DRMLT2020_RHO).expect("valid constant")
+    pub fn rioux_lavoie2020() -> Self {
+        Self::new(RIOUX_LAVOIE2020_RHO).expect("valid constant")
     }
 
     /// The concentration `rho`.
@@ -114,9 +115,9 @@ impl WrappedCauchy {
 }
 
 impl Default for WrappedCauchy {
-    /// [`WrappedCauchy::drmlt2020`].
+    /// [`WrappedCauchy::rioux_lavoie2020`].
     fn default() -> Self {
-        Self::drmlt2020()
+        Self::rioux_lavoie2020()
     }
 }
 
@@ -138,8 +139,8 @@ mod tests {
 
     #[test]
     fn constant_is_exp_minus_quarter() {
-        assert!((DRMLT2020_RHO - (-0.25f64).exp()).abs() < 1e-16);
-        let wc = WrappedCauchy::drmlt2020();
+        assert!((RIOUX_LAVOIE2020_RHO - (-0.25f64).exp()).abs() < 1e-16);
+        let wc = WrappedCauchy::rioux_lavoie2020();
         assert!((wc.inverse_k - (0.125f64).tanh()).abs() < 1e-15);
     }
 
@@ -154,7 +155,7 @@ mod tests {
 
     #[test]
     fn density_integrates_to_one_and_is_the_cdf_derivative() {
-        for rho in [0.0, 0.3, DRMLT2020_RHO, 0.95] {
+        for rho in [0.0, 0.3, RIOUX_LAVOIE2020_RHO, 0.95] {
             let wc = WrappedCauchy::new(rho).unwrap();
             let n = 200_000;
             let h = TAU / n as f64;
@@ -176,7 +177,7 @@ mod tests {
 
     #[test]
     fn quantile_inverts_cdf() {
-        for rho in [0.0, 0.5, DRMLT2020_RHO, 0.99] {
+        for rho in [0.0, 0.5, RIOUX_LAVOIE2020_RHO, 0.99] {
             let wc = WrappedCauchy::new(rho).unwrap();
             assert_eq!(wc.quantile(0.5), 0.0);
             let mut last = -PI - 1e-9;
