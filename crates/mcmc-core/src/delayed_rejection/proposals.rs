@@ -325,8 +325,8 @@ impl Proposal<Vec<f64>> for WrappedGaussianWalk {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::f64::consts::PI;
     use rand::SeedableRng;
+    use std::f64::consts::PI;
 
     #[test]
     fn constructors_validate() {
