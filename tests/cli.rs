@@ -849,3 +849,70 @@ fn environment_flags() {
         assert_fails_with(&full, &[needle]);
     }
 }
+
+/// `--dr-variant` / `--dr-on`: every variant renders on both samplers; bad values name the
+/// flag and the allowed values.
+#[test]
+fn drmlt_flags() {
+    let dir = temp_dir("drmlt");
+    let out = dir.join("dr.exr");
+    for variant in ["tierney-mira", "green-mira", "orbital"] {
+        for base in ["pssmlt", "mmlt"] {
+            let output = chainlight(&[
+                "render",
+                "--integrator",
+                "drmlt",
+                "--dr-variant",
+                variant,
+                "--dr-on",
+                base,
+                "--spp",
+                "2",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--bootstrap-samples",
+                "2000",
+                "--chains",
+                "8",
+                "-o",
+                path_str(&out),
+            ]);
+            assert!(
+                output.status.success(),
+                "{variant} {base}: {}",
+                stderr(&output)
+            );
+            let text = format!("{}{}", stdout(&output), stderr(&output));
+            assert!(
+                text.contains(&format!("delayed rejection: {variant}")),
+                "{text}"
+            );
+        }
+    }
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "drmlt",
+            "--dr-variant",
+            "greenmira",
+            "-o",
+            path_str(&out),
+        ],
+        &["--dr-variant", "tierney-mira, green-mira or orbital"],
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "drmlt",
+            "--dr-on",
+            "bdpt",
+            "-o",
+            path_str(&out),
+        ],
+        &["--dr-on", "pssmlt or mmlt"],
+    );
+}
