@@ -731,8 +731,9 @@ fn same_seed_gives_identical_bytes_with_one_and_two_threads() {
         Method::DrMmlt,
     ] {
         let mut s = settings(scene, 42, 16.0);
-        if method == Method::Mmlt {
-            // Also cover automatic large-step control (statistics pooled over chains).
+        if matches!(method, Method::Mmlt | Method::DrMmlt) {
+            // Also cover automatic large-step control (statistics pooled over chains; for DR
+            // chains eta_s is a small step's probability of moving at either stage).
             s.large_step = LargeStepMode::Auto {
                 initial: 0.5,
                 estimation_steps: 8,
