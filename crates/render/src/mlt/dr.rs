@@ -75,18 +75,21 @@ pub enum DrBase {
 /// Numbers per bounce the layout budgets (BDPT: 3, plus 1 for roulette).
 const PER_BOUNCE: usize = 4;
 
-/// The coordinates the pairwise stages move for paths of at most `max_depth` bounces: camera
-/// stream raster 2 + lens 2 + time 1 + 4 per vertex; light stream light 1 + position 2 +
-/// direction 2 + 4 per vertex; connection stream 3 per strategy of a path length (s = 1 light
-/// samples and t = 1 lens samples) times the lengths. Sizes are rounded up to even so that the
-/// pairs stay (2k, 2k+1).
+/// The coordinates the pairwise stages move for paths of at most `D = max_depth` bounces —
+/// what BDPT reads (crates/render/src/bdpt): camera stream raster 2 + lens 2 + time 1 + 4 per
+/// scattering vertex (D + 1 of them); light stream light 1 + position 2 + direction 2 + 4 per
+/// vertex (at most D + 1); connection stream 3 per s = 1 strategy (at most D + 1) and 2 per
+/// t = 1 strategy (at most D), or MMLT's strategy choice plus one connection: `5 (D + 2)`
+/// covers both. Sizes are rounded up to even so that the pairs stay (2k, 2k+1). Every
+/// coordinate in the layout costs proposal time at every small step (a DR step moves them
+/// all, unlike PSSMLT's lazy Kelemen step), so the layout is no larger than what is read.
 #[must_use]
 pub fn dr_layout(max_depth: u32) -> PairLayout {
-    let d = max_depth.min(62) as usize + 2;
+    let d = max_depth.min(62) as usize;
     let even = |n: usize| n + n % 2;
-    let camera = even(5 + PER_BOUNCE * d);
-    let light = even(5 + PER_BOUNCE * d);
-    let connection = even(3 * d * d);
+    let camera = even(5 + PER_BOUNCE * (d + 1));
+    let light = even(5 + PER_BOUNCE * (d + 1));
+    let connection = even(5 * (d + 2));
     let mut dims = [0usize; PATH_STREAMS];
     dims[Stream::Camera.index()] = camera;
     dims[Stream::Light.index()] = light;
