@@ -11,6 +11,8 @@
 //! and about 4.6 for the ~30 of a Welch two-sample test; we use [`Z_ONE_SAMPLE`] = 6 and
 //! [`Z_TWO_SAMPLE`] = 5.
 
+mod common;
+
 use std::sync::atomic::AtomicBool;
 
 use glam::{Vec2, Vec3, Vec3A};
@@ -139,18 +141,7 @@ fn max_t_two_sample(a: &[Image], b: &[Image]) -> f64 {
 /// A convex, flat-shaded polyhedron approximating a unit sphere (flat normals: the shading
 /// frame is the geometry's, so the furnace argument is exact).
 fn convex_ball(material: u32) -> Mesh {
-    let mut smooth = Mesh::new();
-    smooth.add_sphere(Vec3A::ZERO, 1.0, 8, 16, 0, false);
-    let mut mesh = Mesh::new();
-    for tri in 0..smooth.triangle_count() {
-        let [a, b, c] = smooth.vertices(tri);
-        let n = (b - a).cross(c - a).normalize();
-        let i0 = mesh.add_vertex(a, n, Vec2::ZERO);
-        let i1 = mesh.add_vertex(b, n, Vec2::ZERO);
-        let i2 = mesh.add_vertex(c, n, Vec2::ZERO);
-        mesh.add_triangle([i0, i1, i2], material);
-    }
-    mesh
+    common::flat_shaded_sphere(8, 16, material, false)
 }
 
 /// A white (albedo `albedo`) convex ball under a uniform environment of radiance 1.

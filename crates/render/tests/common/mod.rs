@@ -16,17 +16,7 @@ pub const ENCLOSURE_ALBEDO: f32 = 0.6;
 /// uniform radiance field of a Lambertian wall returns `rho` times it). Flat normals keep the
 /// shading frame equal to the geometry, so the closed form is exact.
 pub fn analytic_enclosure(width: u32, height: u32) -> Scene {
-    let mut smooth = Mesh::new();
-    smooth.add_sphere(Vec3A::ZERO, 1.0, 12, 24, 0, true);
-    let mut mesh = Mesh::new();
-    for tri in 0..smooth.triangle_count() {
-        let [a, b, c] = smooth.vertices(tri);
-        let n = (b - a).cross(c - a).normalize();
-        let i0 = mesh.add_vertex(a, n, Vec2::ZERO);
-        let i1 = mesh.add_vertex(b, n, Vec2::ZERO);
-        let i2 = mesh.add_vertex(c, n, Vec2::ZERO);
-        mesh.add_triangle([i0, i1, i2], 0);
-    }
+    let mesh = flat_shaded_sphere(12, 24, 0, true);
     let wall = Material::diffuse(
         "wall",
         Vec3::splat(ENCLOSURE_ALBEDO),
@@ -39,6 +29,24 @@ pub fn analytic_enclosure(width: u32, height: u32) -> Scene {
         60.0,
     );
     Scene::new(mesh, vec![wall], vec![], camera, width, height)
+}
+
+/// A unit sphere at the origin tessellated into `rings x segments` as [`Mesh::add_sphere`]
+/// does, with flat normals (each triangle's geometric normal at its vertices, so the shading
+/// frame is the geometry's), all of material `material`; `inward` faces the centre.
+pub fn flat_shaded_sphere(rings: u32, segments: u32, material: u32, inward: bool) -> Mesh {
+    let mut smooth = Mesh::new();
+    smooth.add_sphere(Vec3A::ZERO, 1.0, rings, segments, material, inward);
+    let mut mesh = Mesh::new();
+    for tri in 0..smooth.triangle_count() {
+        let [a, b, c] = smooth.vertices(tri);
+        let n = (b - a).cross(c - a).normalize();
+        let i0 = mesh.add_vertex(a, n, Vec2::ZERO);
+        let i1 = mesh.add_vertex(b, n, Vec2::ZERO);
+        let i2 = mesh.add_vertex(c, n, Vec2::ZERO);
+        mesh.add_triangle([i0, i1, i2], material);
+    }
+    mesh
 }
 
 /// The exact radiance of [`analytic_enclosure`] for paths of at most `max_depth` bounces.
