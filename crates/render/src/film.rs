@@ -329,25 +329,60 @@ impl Film {
     }
 
     /// The image: `Σ w L / Σ w` per pixel (0 where no sample landed) plus
-    /// `splat_scale · Σ L` of the splats.
+    /// `splat_scale · Σ L` of the splats. See [`Film::image_checked`].
     #[must_use]
     pub fn image(&self, splat_scale: f64) -> Image {
+        self.image_checked(splat_scale).0
+    }
+
+    /// [`Film::image`] and the number of pixels dropped (made black) because a channel is not
+    /// a finite f32: finite f64 sums above `f32::MAX` (about 3.4e38, e.g. an emitter of
+    /// radiance 3e38 seen directly) would otherwise become infinities. Every pixel returned is
+    /// finite.
+    #[must_use]
+    pub fn image_checked(&self, splat_scale: f64) -> (Image, u64) {
         let mut img = Image::new(self.width, self.height);
+        let mut dropped = 0;
         let splats = self.splat.pixels();
         for (i, px) in img.pixels.iter_mut().enumerate() {
             let w = self.weight[i];
-            *px = std::array::from_fn(|c| {
+            let v: [f32; 3] = std::array::from_fn(|c| {
                 let mean = if w > 0.0 { self.sum[i][c] / w } else { 0.0 };
                 (mean + splats[i][c] * splat_scale) as f32
             });
+            *px = if v.iter().all(|c| c.is_finite()) {
+                v
+            } else {
+                dropped += 1;
+                [0.0; 3]
+            };
         }
-        img
+        (img, dropped)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Splat sums above f32::MAX become black, counted pixels, never inf; finite ones stay.
+    #[test]
+    fn overflowing_pixels_are_dropped_and_counted() {
+        let mut film = Film::new(2, 1, Filter::BOX);
+        let mut grid = SplatGrid::new(2, 1);
+        assert!(grid.add_rgb([0.5, 0.5], [3e38, 0.0, 0.0], 1.0));
+        assert!(grid.add_rgb([0.5, 0.5], [3e38, 0.0, 0.0], 1.0));
+        assert!(grid.add_rgb([1.5, 0.5], [1.0, 2.0, 3.0], 1.0));
+        film.merge_splats(&grid);
+        let (img, dropped) = film.image_checked(1.0);
+        assert_eq!(dropped, 1);
+        assert_eq!(img.pixels[0], [0.0; 3]);
+        assert_eq!(img.pixels[1], [1.0, 2.0, 3.0]);
+        // Control: at half the scale nothing overflows.
+        let (img, dropped) = film.image_checked(0.5);
+        assert_eq!(dropped, 0);
+        assert!(img.pixels[0][0] > 2.9e38 && img.pixels[0][0].is_finite());
+    }
 
     #[test]
     fn tiles_cover_the_image_once() {

@@ -276,15 +276,15 @@ pub fn render_bdpt(
         (w * h) as f64 / samples as f64
     };
     let layers = bands.iter().map(|b| (Some(&b.camera), Some(&b.light)));
-    let image = merge_layers(w, h, light_scale, layers);
+    let (image, overflowed) = merge_layers(w, h, light_scale, layers);
     let strategy_images = if strategy_images {
         let camera = strategies.camera.iter().enumerate().map(|(i, &st)| {
             let layers = bands.iter().map(|b| (Some(&b.strategy_camera[i]), None));
-            (st, merge_layers(w, h, light_scale, layers))
+            (st, merge_layers(w, h, light_scale, layers).0)
         });
         let light = strategies.light.iter().enumerate().map(|(i, &st)| {
             let layers = bands.iter().map(|b| (None, Some(&b.strategy_light[i])));
-            (st, merge_layers(w, h, light_scale, layers))
+            (st, merge_layers(w, h, light_scale, layers).0)
         });
         let mut all: Vec<((u8, u8), Image)> = camera
             .chain(light)
@@ -299,20 +299,21 @@ pub fn render_bdpt(
         image,
         spp: done,
         samples,
-        dropped: bands.iter().map(|b| b.dropped).sum(),
+        dropped: bands.iter().map(|b| b.dropped).sum::<u64>() + overflowed,
         cancelled,
         strategy_images,
     }
 }
 
 /// The image of the bands' layers, merged in band order: the mean of the camera tiles' pixel
-/// samples plus `light_scale` times the light grids' sums.
+/// samples plus `light_scale` times the light grids' sums; with the number of pixels dropped
+/// because they overflow f32 ([`Film::image_checked`]).
 fn merge_layers<'a>(
     w: usize,
     h: usize,
     light_scale: f64,
     bands: impl Iterator<Item = (Option<&'a FilmTile>, Option<&'a SplatGrid>)>,
-) -> Image {
+) -> (Image, u64) {
     let mut film = Film::new(w, h, Filter::BOX);
     for (camera, splats) in bands {
         if let Some(tile) = camera {
@@ -322,7 +323,7 @@ fn merge_layers<'a>(
             film.merge_splats(grid);
         }
     }
-    film.image(light_scale)
+    film.image_checked(light_scale)
 }
 
 #[cfg(test)]

@@ -157,10 +157,11 @@ pub fn render_pt(
             }
         }
     }
+    let (image, overflowed) = film.image_checked(0.0);
     PtOutput {
-        image: film.image(0.0),
+        image,
         samples: film.samples,
-        dropped_nonfinite: film.nonfinite,
+        dropped_nonfinite: film.nonfinite + overflowed,
         cancelled,
     }
 }
