@@ -309,6 +309,18 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
         image_io::write_exr(&path, img)?;
         println!("wrote       {}", path.display());
     }
+    if let Some(map) = &output.stage_map {
+        // The delayed-rejection stage map (share of each pixel's estimate from second-stage
+        // moves, 0..=1) as `<stem>_stage2.exr` and a PNG preview.
+        let stem = args
+            .output
+            .file_stem()
+            .map_or_else(|| "chainlight".into(), |x| x.to_string_lossy().into_owned());
+        let path = args.output.with_file_name(format!("{stem}_stage2.exr"));
+        image_io::write_exr(&path, map)?;
+        image_io::write_png(path.with_extension("png"), map, 0.0)?;
+        println!("wrote       {} (DR stage map)", path.display());
+    }
     if output.cancelled {
         eprintln!(
             "interrupted: writing the partial image ({} samples, {:.2} per pixel)",

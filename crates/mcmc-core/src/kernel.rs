@@ -66,6 +66,14 @@ pub trait Observer<S, P> {
     fn splat(&mut self, sample: &Sample<S, P>, weight: f64) {
         let _ = (sample, weight);
     }
+    /// Receives a sample a multi-stage kernel proposed at stage `stage` (1 or 2) with its
+    /// splat weight. Delayed-rejection kernels report their second-stage candidate through
+    /// this (for the per-pixel "stage map" of the DR paper, Fig. 1 and 9); the default
+    /// forwards to [`Observer::splat`], so observers that do not care see every splat alike.
+    fn splat_at_stage(&mut self, sample: &Sample<S, P>, weight: f64, stage: u8) {
+        let _ = stage;
+        self.splat(sample, weight);
+    }
     /// Called once at the end of each step.
     fn step(&mut self, info: &StepInfo) {
         let _ = info;

@@ -121,6 +121,9 @@ pub struct RenderOutput {
     pub notes: Vec<String>,
     /// BDPT with `strategy_images`: the MIS-weighted image of each strategy `(s, t)`.
     pub strategy_images: Vec<((u8, u8), Image)>,
+    /// Delayed-rejection MLT: the stage map, per pixel the share of the estimate contributed
+    /// by second-stage candidates (`render::mlt::StagedSplats`; paper Fig. 1 and 9).
+    pub stage_map: Option<Image>,
 }
 
 /// Edge length of PT's square tiles: defined with the PT driver.
@@ -280,6 +283,7 @@ fn render_pt(
         elapsed: start.elapsed(),
         notes: emitter_notes(scene),
         strategy_images: Vec::new(),
+        stage_map: None,
     }
 }
 
@@ -314,6 +318,7 @@ fn render_bdpt(
         elapsed: start.elapsed(),
         notes: emitter_notes(scene),
         strategy_images: out.strategy_images,
+        stage_map: None,
     }
 }
 
@@ -341,6 +346,7 @@ fn render_bidirectional(
         large_step: m.large_step,
         seed: settings.seed,
         streams: PATH_STREAMS,
+        stage_map: settings.integrator == IntegratorKind::Drmlt,
     };
     let small = SmallStep::new(m.small_step);
     let kernel = |p: f64| {
@@ -421,6 +427,7 @@ fn render_bidirectional(
         elapsed: start.elapsed(),
         notes,
         strategy_images: Vec::new(),
+        stage_map: out.stage_map,
     }
 }
 

@@ -179,6 +179,7 @@ fn settings(scene: &Scene, seed: u64, mutations_per_pixel: f64) -> MltSettings {
         large_step: LargeStepMode::Fixed(0.3),
         seed,
         streams: PATH_STREAMS,
+        stage_map: false,
     }
 }
 
@@ -780,4 +781,42 @@ fn same_seed_gives_identical_bytes_with_one_and_two_threads() {
         );
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The delayed-rejection stage map (share of each pixel's estimate from second-stage
+/// candidates): present only when asked for, in [0, 1] (every DR splat weight is
+/// non-negative), and it tells the rules apart as the per-stage statistics do — the orbital
+/// second stage is accepted most of the time, Tierney-Mira's nearly never after a bold
+/// pairwise first stage (section 4.3), so orbital's map is far brighter. Control: the
+/// one-stage PSSMLT kernel gives an all-zero map.
+#[test]
+fn drmlt_stage_map() {
+    let scene = cornell();
+    let params = BdptParams::default();
+    let mut s = settings(scene, 11, 32.0);
+    assert!(render(Method::Dr(DrVariant::Orbital), scene, params, &s)
+        .stage_map
+        .is_none());
+    s.stage_map = true;
+    let mean =
+        |m: &Image| m.pixels.iter().map(|p| f64::from(p[0])).sum::<f64>() / m.pixels.len() as f64;
+    let orbital = render(Method::Dr(DrVariant::Orbital), scene, params, &s)
+        .stage_map
+        .expect("stage map");
+    assert!(orbital
+        .pixels
+        .iter()
+        .all(|p| p[0].is_finite() && (0.0..=1.0 + 1e-6).contains(&p[0])));
+    let tm = render(Method::Dr(DrVariant::TierneyMira), scene, params, &s)
+        .stage_map
+        .expect("stage map");
+    let (mo, mt) = (mean(&orbital), mean(&tm));
+    assert!(
+        mo > 0.02 && mo > 4.0 * mt,
+        "orbital {mo} vs tierney-mira {mt}"
+    );
+    let one_stage = render(Method::Pssmlt, scene, params, &s)
+        .stage_map
+        .expect("stage map");
+    assert!(one_stage.pixels.iter().all(|p| p[0] == 0.0));
 }

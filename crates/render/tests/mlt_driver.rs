@@ -76,6 +76,7 @@ fn settings(seed: u64, large_step: LargeStepMode) -> MltSettings {
         large_step,
         seed,
         streams: 1,
+        stage_map: false,
     }
 }
 

@@ -362,7 +362,7 @@ where
         }
         info.accept_prob[1] = a2;
         if a2 > 0.0 {
-            observer.splat(z, a2);
+            observer.splat_at_stage(z, a2, 2);
         }
         observer.splat(current, 1.0 - a2);
         if a2 >= 1.0 || (a2 > 0.0 && rng.random::<f64>() < a2) {

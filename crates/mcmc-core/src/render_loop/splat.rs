@@ -39,6 +39,14 @@ pub trait SplatSink: Send {
     /// Adds `weight * splat.rgb` where `splat.raster` lands; returns false if the splat was
     /// dropped (outside the image, or non-finite).
     fn add(&mut self, splat: &Splat, weight: f64) -> bool;
+    /// Adds a splat of a candidate a multi-stage kernel proposed at stage `stage`
+    /// ([`crate::Observer::splat_at_stage`]); the default is [`SplatSink::add`]. A sink that
+    /// keeps a separate layer of second-stage splats (a delayed-rejection stage map) overrides
+    /// it.
+    fn add_at_stage(&mut self, splat: &Splat, weight: f64, stage: u8) -> bool {
+        let _ = stage;
+        self.add(splat, weight)
+    }
     /// Adds everything `other` accumulated.
     fn merge(&mut self, other: &Self);
 }
@@ -178,12 +186,22 @@ impl<'a, K> SplatObserver<'a, K> {
 impl<S, P: SplatPayload, K: SplatSink> Observer<S, P> for SplatObserver<'_, K> {
     #[inline]
     fn splat(&mut self, sample: &Sample<S, P>, weight: f64) {
+        self.splat_at_stage(sample, weight, 1);
+    }
+
+    #[inline]
+    fn splat_at_stage(&mut self, sample: &Sample<S, P>, weight: f64, stage: u8) {
         if weight == 0.0 || sample.log_density == f64::NEG_INFINITY {
             return;
         }
         let inv_f = (-sample.log_density).exp();
         for s in sample.payload.splats() {
-            if !self.sink.add(s, weight * inv_f) {
+            let added = if stage == 1 {
+                self.sink.add(s, weight * inv_f)
+            } else {
+                self.sink.add_at_stage(s, weight * inv_f, stage)
+            };
+            if !added {
                 self.dropped += 1;
             }
         }

@@ -7,13 +7,12 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use mcmc_core::controller::{AutoLargeStep, LargeStepEstimate, LargeStepStats, LargeStepTunable};
-use mcmc_core::render_loop::{
-    LoopBudget, LoopOutput, LoopSettings, RenderLoop, SplatGrid, SplatPayload,
-};
+use mcmc_core::render_loop::{LoopBudget, LoopOutput, LoopSettings, RenderLoop, SplatPayload};
 use mcmc_core::stats::AcceptanceStats;
 use mcmc_core::{Kernel, NoAdaptation, Progress, Target};
 use pss::{FreshPss, PssState};
 
+use super::StagedSplats;
 use crate::image::Image;
 
 /// How the large-step probability is chosen.
@@ -62,6 +61,9 @@ pub struct MltSettings {
     pub seed: u64,
     /// Number of PSS streams the target reads (1..=4).
     pub streams: usize,
+    /// Also accumulate the delayed-rejection stage map ([`MltOutput::stage_map`]): one more
+    /// splat layer per job (only meaningful with a two-stage kernel).
+    pub stage_map: bool,
 }
 
 /// What an MCMC render produced.
@@ -90,6 +92,9 @@ pub struct MltOutput {
     pub non_finite: u64,
     /// True if cancelled before the budget was used.
     pub cancelled: bool,
+    /// With [`MltSettings::stage_map`]: per pixel, the share of the estimate contributed by
+    /// second-stage candidates of a delayed-rejection kernel ([`super::StagedSplats`]).
+    pub stage_map: Option<Image>,
     /// Why the image is black, if it is ("no light-carrying path found").
     pub message: Option<String>,
     /// Other notes from the loop (chains capped, bootstrap stopped early by the time budget).
@@ -133,7 +138,8 @@ where
     let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
         .unwrap_or_else(|_| unreachable!("clamped to 1..=4"));
     let (w, h) = (settings.width, settings.height);
-    let sink = || SplatGrid::new(w, h);
+    let stage_map = settings.stage_map;
+    let sink = || StagedSplats::new(w, h, stage_map);
     match settings.large_step {
         LargeStepMode::Fixed(p) => {
             let out = RenderLoop {
@@ -178,7 +184,7 @@ where
 
 /// Turns the loop's output into an [`MltOutput`].
 fn finish<Sh>(
-    out: Result<LoopOutput<SplatGrid, Sh>, mcmc_core::McmcError>,
+    out: Result<LoopOutput<StagedSplats, Sh>, mcmc_core::McmcError>,
     settings: &MltSettings,
     initial_p: f64,
     estimate: impl Fn(&Sh) -> Option<LargeStepEstimate>,
@@ -199,6 +205,7 @@ fn finish<Sh>(
                 dropped: 0,
                 non_finite: 0,
                 cancelled: false,
+                stage_map: None,
                 message: Some(format!("invalid MCMC settings: {e}")),
                 notes: Vec::new(),
             }
@@ -210,7 +217,7 @@ fn finish<Sh>(
     let message = if out.found_nothing { notes.pop() } else { None };
     // The splat sums are finite f64; a pixel above f32::MAX would still become infinite in
     // the f32 image: such pixels are dropped (black) and counted, never written as inf.
-    let (pixels, overflowed) = out.sink.to_rgb32_checked(scale);
+    let (pixels, overflowed) = out.sink.image.to_rgb32_checked(scale);
     if overflowed > 0 {
         notes.push(format!(
             "{overflowed} pixel(s) exceed the largest f32 value (3.4e38) and were dropped (black): the scene's radiance is too large to store; scale its emission down"
@@ -232,6 +239,7 @@ fn finish<Sh>(
         dropped: out.dropped_splats + overflowed,
         non_finite: out.non_finite,
         cancelled: out.cancelled,
+        stage_map: out.sink.stage_map(),
         message,
         notes,
     }
