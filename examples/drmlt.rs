@@ -326,6 +326,7 @@ fn stage_stats(scene: &Scene, size: u32, variant: DrVariant, base: DrBase) -> Ac
         large_step: LargeStepMode::Fixed(0.3),
         seed: 7,
         streams: PATH_STREAMS,
+        stage_map: false,
     };
     let layout = dr::dr_layout(5);
     match base {
