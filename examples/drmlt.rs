@@ -261,7 +261,7 @@ fn run_once(
     size: u32,
     budget: Budget,
     seed: u64,
-) -> (Run, Image) {
+) -> (Run, Image, Option<Image>) {
     let out = render(
         scene,
         &method.settings(size, budget, seed),
@@ -275,7 +275,7 @@ fn run_once(
         mutations_per_second: out.samples as f64 / out.elapsed.as_secs_f64(),
         acceptance: acceptance(&out.notes),
     };
-    (run, out.image)
+    (run, out.image, out.stage_map)
 }
 
 /// Acceptance on a fixed mutation budget (16 per pixel, small bootstrap): load-independent.
@@ -477,7 +477,7 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
     let mut runs: Vec<Vec<Run>> = methods.iter().map(|_| Vec::new()).collect();
     for seed in 0..o.seeds {
         for (m, method) in methods.iter().enumerate() {
-            let (run, image) = run_once(&scene, &reference, *method, size, budget, seed);
+            let (run, image, stage_map) = run_once(&scene, &reference, *method, size, budget, seed);
             eprintln!(
                 "{name} seed {seed} {}: relMSE {:.4}, MAD {:.4}, {:.0} mut/s, acceptance {:.3}",
                 method.label(),
@@ -490,6 +490,13 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
                 let stem = dir.join(method.file_stem());
                 let _ = render::image_io::write_exr(stem.with_extension("exr"), &image);
                 let _ = render::image_io::write_png(stem.with_extension("png"), &image, 0.0);
+                // DR methods: the stage map (share of each pixel from second-stage moves).
+                if let Some(map) = &stage_map {
+                    let name = format!("{}_stage2", method.file_stem());
+                    let _ = render::image_io::write_exr(dir.join(&name).with_extension("exr"), map);
+                    let _ =
+                        render::image_io::write_png(dir.join(name).with_extension("png"), map, 0.0);
+                }
             }
             runs[m].push(run);
         }
