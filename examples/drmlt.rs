@@ -123,31 +123,6 @@ fn parse_options() -> Options {
     o
 }
 
-/// Box-downsamples `img` by an integer factor (the reference is rendered at 256 x 256).
-fn downsample(img: &Image, w: usize, h: usize) -> Option<Image> {
-    if w == 0 || h == 0 || !img.width.is_multiple_of(w) || !img.height.is_multiple_of(h) {
-        return None;
-    }
-    let (fx, fy) = (img.width / w, img.height / h);
-    let mut out = Image::new(w, h);
-    for y in 0..h {
-        for x in 0..w {
-            let mut acc = [0.0f64; 3];
-            for dy in 0..fy {
-                for dx in 0..fx {
-                    let p = img.get(x * fx + dx, y * fy + dy);
-                    for c in 0..3 {
-                        acc[c] += f64::from(p[c]);
-                    }
-                }
-            }
-            let n = (fx * fy) as f64;
-            out.set(x, y, acc.map(|a| (a / n) as f32));
-        }
-    }
-    Some(out)
-}
-
 /// Median, min and max of `v` (NaN-free input).
 fn summary(v: &[f64]) -> (f64, f64, f64) {
     let mut s = v.to_vec();
@@ -431,7 +406,7 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
     let reference_path = Path::new("scenes/references").join(format!("{name}.exr"));
     let Some(reference) = render::image_io::read_exr(&reference_path)
         .ok()
-        .and_then(|r| downsample(&r, size as usize, size as usize))
+        .and_then(|r| r.box_downsample(size as usize, size as usize))
     else {
         eprintln!(
             "{name}: no usable reference at {} (run scripts/make_references.sh); skipped",

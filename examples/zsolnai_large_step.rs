@@ -12,38 +12,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-use render::image::Image;
 use render::mlt::LargeStepMode;
 use render::scene::Scene;
 use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
-
-fn downsample(img: &Image, w: usize, h: usize) -> Option<Image> {
-    if !img.width.is_multiple_of(w) || !img.height.is_multiple_of(h) {
-        return None;
-    }
-    let (fx, fy) = (img.width / w, img.height / h);
-    let mut out = Image::new(w, h);
-    for y in 0..h {
-        for x in 0..w {
-            let mut acc = [0.0f64; 3];
-            for dy in 0..fy {
-                for dx in 0..fx {
-                    let p = img.get(x * fx + dx, y * fy + dy);
-                    for c in 0..3 {
-                        acc[c] += f64::from(p[c]);
-                    }
-                }
-            }
-            let n = (fx * fy) as f64;
-            out.pixels[y * w + x] = [
-                (acc[0] / n) as f32,
-                (acc[1] / n) as f32,
-                (acc[2] / n) as f32,
-            ];
-        }
-    }
-    Some(out)
-}
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -106,7 +77,7 @@ fn main() {
         let reference_path = Path::new("scenes/references").join(format!("{name}.exr"));
         let Some(reference) = render::image_io::read_exr(&reference_path)
             .ok()
-            .and_then(|r| downsample(&r, size as usize, size as usize))
+            .and_then(|r| r.box_downsample(size as usize, size as usize))
         else {
             eprintln!(
                 "{name}: no usable reference at {} (run scripts/make_references.sh); skipped",

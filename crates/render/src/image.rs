@@ -12,6 +12,38 @@ pub struct Image {
 }
 
 impl Image {
+    /// The image box-downsampled to `width x height` (each output pixel the mean of its
+    /// `(self.width / width) x (self.height / height)` block), or `None` unless both sides
+    /// divide exactly — e.g. a 256 x 256 reference compared with a 64 x 64 render.
+    #[must_use]
+    pub fn box_downsample(&self, width: usize, height: usize) -> Option<Image> {
+        if width == 0
+            || height == 0
+            || !self.width.is_multiple_of(width)
+            || !self.height.is_multiple_of(height)
+        {
+            return None;
+        }
+        let (fx, fy) = (self.width / width, self.height / height);
+        let n = (fx * fy) as f64;
+        let mut out = Image::new(width, height);
+        for y in 0..height {
+            for x in 0..width {
+                let mut acc = [0.0f64; 3];
+                for dy in 0..fy {
+                    for dx in 0..fx {
+                        let p = self.pixels[(y * fy + dy) * self.width + x * fx + dx];
+                        for c in 0..3 {
+                            acc[c] += f64::from(p[c]);
+                        }
+                    }
+                }
+                out.pixels[y * width + x] = acc.map(|a| (a / n) as f32);
+            }
+        }
+        Some(out)
+    }
+
     /// A black image of the given size.
     #[must_use]
     pub fn new(width: usize, height: usize) -> Self {
@@ -103,6 +135,20 @@ pub fn luminance(rgb: [f32; 3]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn box_downsample_averages_blocks() {
+        let mut img = Image::new(4, 2);
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            *p = [i as f32, 0.0, 1.0];
+        }
+        let d = img.box_downsample(2, 1).unwrap();
+        assert_eq!(
+            d.pixels,
+            vec![[(0.0 + 1.0 + 4.0 + 5.0) / 4.0, 0.0, 1.0], [4.5, 0.0, 1.0]]
+        );
+        assert!(img.box_downsample(3, 1).is_none() && img.box_downsample(0, 1).is_none());
+    }
 
     #[test]
     fn accessors_and_statistics() {
