@@ -21,9 +21,8 @@
 //! first stage of independent 1-D Kelemen steps; an orbit built from the raw, not minimal,
 //! displacement) break it on most or many triples.
 //!
-//! [`OrbitalDr`] is a minimal two-stage kernel written here to run chains: stage 1 MH with
-//! the pairwise step, stage 2 (after a rejection) the orbital proposal with eq. 11. It is not
-//! the library's delayed-rejection kernel (that lives in `mcmc-core`); chi-square
+//! Chains run the library's kernel, `mcmc_core::DelayedRejection::orbital`: stage 1 MH with
+//! the pairwise step, stage 2 (after a rejection) the orbital proposal with eq. 11; chi-square
 //! stationarity from exact starts checks it on the torus target whose modes straddle both
 //! seams and on a 3-D target with a lone third coordinate. Stationarity from exact starts is
 //! a weak detector of these local errors (20 000 starts, 30-300 steps, measured while writing
@@ -40,7 +39,7 @@ use mcmc_core::testing::{
 };
 use mcmc_core::toy::special::normal_interval;
 use mcmc_core::toy::{wrapped_normal_pdf, Bins, TorusMixture, ToyTarget};
-use mcmc_core::{Kernel, Observer, Proposal, Proposed, SampleOf, StepInfo, Target};
+use mcmc_core::{Kernel, Proposal, Proposed, Target};
 use pss::{
     torus_displacement, wrap, Orbital, PairwiseKelemen, PairwiseKelemenParams, WrappedCauchy,
     RIOUX_LAVOIE2020_RHO,
@@ -601,78 +600,6 @@ fn orbital_wrong_rho_is_rejected() {
 // A chain with the orbital acceptance (eq. 11)
 // ---------------------------------------------------------------------------------------------
 
-/// A minimal two-stage delayed-rejection kernel for testing the proposals (module docs).
-#[derive(Clone, Debug)]
-struct OrbitalDr<P1, P2> {
-    stage1: P1,
-    stage2: P2,
-}
-
-impl<T, P1, P2> Kernel<T> for OrbitalDr<P1, P2>
-where
-    T: Target<State = Vec<f64>, Payload = ()>,
-    P1: Proposal<Vec<f64>>,
-    P2: ConditionalProposal<Vec<f64>>,
-{
-    fn stages(&self) -> usize {
-        2
-    }
-
-    fn step<R, O>(
-        &mut self,
-        target: &T,
-        current: &mut SampleOf<T>,
-        scratch: &mut [SampleOf<T>],
-        rng: &mut R,
-        observer: &mut O,
-    ) -> StepInfo
-    where
-        R: Rng + ?Sized,
-        O: Observer<Vec<f64>, ()> + ?Sized,
-    {
-        let [y, z, ..] = scratch else {
-            unreachable!("two scratch samples")
-        };
-        let mut info = StepInfo::new(0);
-        info.stages_tried = 1;
-        self.stage1.propose(&current.state, &mut y.state, rng);
-        y.log_density = target.evaluate(&mut y.state, &mut ());
-        let a1 = (y.log_density - current.log_density).exp().min(1.0);
-        info.accept_prob[0] = a1;
-        if rng.random::<f64>() < a1 {
-            std::mem::swap(current, y);
-            info.accepted_stage = 1;
-            observer.step(&info);
-            return info;
-        }
-        info.stages_tried = 2;
-        let proposed = self
-            .stage2
-            .propose(&current.state, &y.state, &mut z.state, rng);
-        if matches!(proposed, Proposed::Invalid { .. }) {
-            observer.step(&info);
-            return info;
-        }
-        z.log_density = target.evaluate(&mut z.state, &mut ());
-        let (pz, py) = (
-            (z.log_density - current.log_density).exp(),
-            (y.log_density - current.log_density).exp(),
-        );
-        let a2 = ((pz - py).max(0.0) / (1.0 - py)).min(1.0); // eq. 11
-        info.accept_prob[1] = a2;
-        if rng.random::<f64>() < a2 {
-            std::mem::swap(current, z);
-            info.accepted_stage = 2;
-        }
-        observer.step(&info);
-        info
-    }
-
-    fn log_flow(&self, _target: &T, _path: &[SampleOf<T>]) -> f64 {
-        unimplemented!("only used for stationarity tests")
-    }
-}
-
 /// A 3-D target: [`TorusMixture::across_seam`] on the first pair times a wrapped normal
 /// (mean 0.97, sd 0.06, across the seam) on the lone third coordinate.
 ///
@@ -830,10 +757,8 @@ fn run<T: ToyTarget, K: Kernel<T> + Clone>(target: &T, kernel: &K, seed: u64) ->
 
 #[test]
 fn orbital_rule_keeps_targets_across_the_seams() {
-    let kernel = OrbitalDr {
-        stage1: PairwiseKelemen::new(wide()),
-        stage2: Orbital::default(),
-    };
+    let kernel =
+        mcmc_core::DelayedRejection::orbital(PairwiseKelemen::new(wide()), Orbital::default());
     let torus = TorusMixture::across_seam();
     let r = run(&torus, &kernel, 61);
     report("eq. 11 chain on the torus mixture (2-D)", &r);
