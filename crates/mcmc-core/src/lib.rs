@@ -33,6 +33,7 @@ pub mod controller;
 pub mod delayed_rejection;
 mod error;
 mod kernel;
+pub mod langevin;
 mod mh;
 pub mod partition;
 mod progress;

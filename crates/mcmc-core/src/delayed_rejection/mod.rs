@@ -12,7 +12,7 @@
 mod arithmetic;
 mod kernel;
 mod proposals;
-mod rule;
+pub(crate) mod rule;
 mod wrapped_cauchy;
 
 pub use arithmetic::{Euclidean, NoGhost, StateArithmetic, Torus};

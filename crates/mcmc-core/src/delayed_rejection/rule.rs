@@ -75,7 +75,7 @@ impl<A> DrRule<A> {
 
 /// `ln(1 - a)` for a probability `a`.
 #[inline]
-pub(super) fn ln_one_minus(a: f64) -> f64 {
+pub(crate) fn ln_one_minus(a: f64) -> f64 {
     (-a).ln_1p()
 }
 
@@ -84,7 +84,7 @@ pub(super) fn ln_one_minus(a: f64) -> f64 {
 /// reachable on paths the kernel never takes, whose forward flow is zero anyway), NaN if
 /// either is NaN (the kernel reports it as non-finite and rejects).
 #[inline]
-pub(super) fn ln_accept_from_ratio(num: f64, den: f64) -> f64 {
+pub(crate) fn ln_accept_from_ratio(num: f64, den: f64) -> f64 {
     if num.is_nan() || den.is_nan() {
         f64::NAN
     } else if num == f64::NEG_INFINITY {

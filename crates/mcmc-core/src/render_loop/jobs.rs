@@ -95,7 +95,8 @@ where
         });
         for job in jobs.iter_mut() {
             for (chain, _) in &mut job.chains {
-                chain.controller_mut().contribute(&mut pooled);
+                let (kernel, controller) = chain.kernel_and_controller_mut();
+                controller.contribute(kernel, &mut pooled);
             }
         }
         for job in jobs.iter_mut() {

@@ -8,7 +8,7 @@ use crate::controller::{
 /// A controller whose statistics are pooled over all chains of a render loop.
 ///
 /// At the end of every round the loop calls [`SharedController::contribute`] on every chain's
-/// controller, in job order and chain order, into one pooled value (cumulative over the whole
+/// controller (with its kernel), in job order and chain order, into one pooled value (cumulative over the whole
 /// run), then [`SharedController::receive`] on every controller with the pooled value. Under a
 /// mutation budget rounds are fixed, so the result does not depend on the thread count (the
 /// paper implementations use atomics and locks instead, which are not reproducible).
@@ -17,29 +17,30 @@ use crate::controller::{
 pub trait SharedController<K: ?Sized> {
     /// The pooled statistics.
     type Shared: Clone + Default + Send + Sync + std::fmt::Debug;
-    /// Adds this chain's statistics gathered since the last call to `pooled`.
-    fn contribute(&mut self, pooled: &mut Self::Shared);
+    /// Adds this chain's statistics gathered since the last call to `pooled` (the kernel is
+    /// passed for statistics it holds itself, such as a gradient cache).
+    fn contribute(&mut self, kernel: &mut K, pooled: &mut Self::Shared);
     /// Receives the statistics pooled over all chains since the start; may tune `kernel`.
     fn receive(&mut self, kernel: &mut K, pooled: &Self::Shared);
 }
 
 impl<K: ?Sized> SharedController<K> for NoAdaptation {
     type Shared = ();
-    fn contribute(&mut self, _pooled: &mut ()) {}
+    fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}
     fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
 }
 
 /// Global scale adaptation is per chain (each chain follows its own sign rule).
 impl<K: ?Sized> SharedController<K> for GlobalScale {
     type Shared = ();
-    fn contribute(&mut self, _pooled: &mut ()) {}
+    fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}
     fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
 }
 
 /// Regional scales are per chain for now (the regional-adaptation issue shares them).
 impl<K: ?Sized> SharedController<K> for RegionalScale {
     type Shared = ();
-    fn contribute(&mut self, _pooled: &mut ()) {}
+    fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}
     fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
 }
 
@@ -50,7 +51,7 @@ impl<K: ?Sized> SharedController<K> for RegionalScale {
 /// statistics, and shares nothing.
 impl<K: LargeStepTunable + ?Sized> SharedController<K> for AutoLargeStep {
     type Shared = LargeStepStats;
-    fn contribute(&mut self, pooled: &mut LargeStepStats) {
+    fn contribute(&mut self, _kernel: &mut K, pooled: &mut LargeStepStats) {
         pooled.merge(&self.take_unshared());
     }
     fn receive(&mut self, kernel: &mut K, pooled: &LargeStepStats) {

@@ -1,0 +1,41 @@
+//! Sharing one gradient cache among the chains of a render loop, deterministically.
+
+use super::cache_view::PooledCache;
+use super::kernel::HasGradientCache;
+use crate::controller::Controller;
+use crate::kernel::StepInfo;
+use crate::render_loop::SharedController;
+
+/// The controller that shares the gradient cache of cache-driven and hybrid MALA among all
+/// chains of a [`crate::render_loop::RenderLoop`]: at every round boundary each chain's new
+/// entries are appended to the pooled cache in job order and chain order (until it holds
+/// `H`), and every chain receives the pooled cache as its new shared snapshot. Within a round a
+/// chain sees the snapshot plus its own new entries; so the image is identical for any
+/// thread count under a mutation budget (the paper's implementation shares one cache behind a
+/// lock instead, which is not reproducible).
+///
+/// It adapts nothing per step (the adaptation lives in the kernel's
+/// [`super::Adaptation`]); [`Controller::is_frozen`] is always true.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CacheSharing;
+
+impl<K: ?Sized, S> Controller<K, S> for CacheSharing {
+    fn after_step(&mut self, _kernel: &mut K, _info: &StepInfo) {}
+    fn is_frozen(&self) -> bool {
+        true
+    }
+}
+
+impl<K: HasGradientCache + ?Sized> SharedController<K> for CacheSharing {
+    type Shared = PooledCache;
+    fn contribute(&mut self, kernel: &mut K, pooled: &mut PooledCache) {
+        if let Some(view) = kernel.gradient_cache_mut() {
+            view.contribute(pooled);
+        }
+    }
+    fn receive(&mut self, kernel: &mut K, pooled: &PooledCache) {
+        if let Some(view) = kernel.gradient_cache_mut() {
+            view.receive(pooled);
+        }
+    }
+}
