@@ -1,0 +1,235 @@
+//! Independent path sampling with an exact density: the scene trait for a whole new path
+//! and a generic unidirectional implementation (camera random walk, ending by BSDF sampling
+//! or by a connection to a sampled emitter point).
+
+use rand::{Rng, RngExt};
+
+use crate::error::PathspaceError;
+use crate::path::{direction, solid_angle_to_area, Path, Vertex};
+use crate::scene::{PathScene, SurfacePoint};
+
+/// A source of independent paths with their exact density (with respect to [`Path`]'s
+/// measure): what the independence mutation draws from. A renderer may implement it with its
+/// bidirectional path tracer (the combined density of all its strategies);
+/// [`UnidirectionalSampler`] implements it for any [`PathScene`].
+pub trait IndependentSampler {
+    /// Draws a path into `path` (overwriting it). Returns false if the sample failed
+    /// (absorbed, missed the scene, blocked connection): the density below is a
+    /// sub-probability density and failures carry the missing mass.
+    fn sample<R: Rng + ?Sized>(&self, rng: &mut R, path: &mut Path) -> bool;
+
+    /// `ln p(x)`: the density with which [`IndependentSampler::sample`] produces `path`
+    /// (`NEG_INFINITY` if it cannot).
+    fn log_density(&self, path: &Path) -> f64;
+}
+
+/// Parameters of [`UnidirectionalSampler`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UnidirectionalParams {
+    /// Paths have `1..=max_segments` edges, each length equally likely.
+    pub max_segments: usize,
+    /// Probability of ending a path of two or more edges with a connection to a sampled
+    /// emitter point (next-event estimation) rather than by BSDF sampling.
+    pub connect_probability: f64,
+}
+
+impl Default for UnidirectionalParams {
+    /// Up to 5 edges, connection probability 1/2.
+    fn default() -> Self {
+        Self {
+            max_segments: 5,
+            connect_probability: 0.5,
+        }
+    }
+}
+
+impl UnidirectionalParams {
+    /// Checks the parameters.
+    ///
+    /// # Errors
+    /// [`PathspaceError::InvalidParameter`] for `max_segments` outside `1..=64` or a
+    /// connection probability outside `[0, 1]`.
+    pub fn validate(&self) -> Result<(), PathspaceError> {
+        PathspaceError::check_range("max_segments", self.max_segments as f64, 1.0, 64.0)?;
+        PathspaceError::check_range("connect_probability", self.connect_probability, 0.0, 1.0)
+    }
+}
+
+/// A length-first unidirectional path sampler with an exact, cheap density.
+///
+/// To draw a path: choose the number of edges `n` uniformly in `1..=max_segments`; choose the
+/// technique: with probability `c = connect_probability` (only for `n >= 2`) *connect*, else
+/// *hit*. Trace a camera random walk (raster uniform, then BSDF sampling; specular lobes chosen
+/// with their probability) for `n` edges (hit: the last vertex must lie on an emitter) or for
+/// `n - 1` edges and connect to an emitter point sampled by area (connect: the last walk vertex
+/// must be non-specular, the connection unoccluded).
+///
+/// Its density is the sum over the two techniques that can produce `x`:
+///
+/// `p(x) = (1 / N) [ (1 - c_n) p_hit(x) + c_n p_connect(x) ]`, with `c_1 = 0`, `c_n = c`,
+///
+/// `p_hit(x) = p_cam(w_1) J_2 prod_{i=2}^{k-1} q_i`, where `J_j = |cos θ_j| / r^2` converts
+/// solid angle at `x_{j-1}` to area at `x_j` and `q_i` is `p_bsdf(w_i) J_{i+1}` at a
+/// non-specular vertex or the lobe probability at a specular one;
+/// `p_connect(x) = p_cam(w_1) J_2 prod_{i=2}^{k-2} q_i  p_light(x_k)` (zero if `x_{k-1}` is
+/// specular). Both are densities with respect to [`Path`]'s measure.
+#[derive(Debug)]
+pub struct UnidirectionalSampler<'a, S: ?Sized> {
+    scene: &'a S,
+    params: UnidirectionalParams,
+}
+
+impl<S: ?Sized> Clone for UnidirectionalSampler<'_, S> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<S: ?Sized> Copy for UnidirectionalSampler<'_, S> {}
+
+impl<'a, S: PathScene + ?Sized> UnidirectionalSampler<'a, S> {
+    /// A sampler over `scene`.
+    ///
+    /// # Errors
+    /// If the parameters are out of range (see [`UnidirectionalParams::validate`]).
+    pub fn new(scene: &'a S, params: UnidirectionalParams) -> Result<Self, PathspaceError> {
+        params.validate()?;
+        Ok(Self { scene, params })
+    }
+
+    /// The parameters.
+    #[must_use]
+    pub fn params(&self) -> &UnidirectionalParams {
+        &self.params
+    }
+
+    fn connect_probability(&self, segments: usize) -> f64 {
+        if segments >= 2 {
+            self.params.connect_probability
+        } else {
+            0.0
+        }
+    }
+
+    /// Extends the walk at vertex `i` (`i >= 1`) by BSDF sampling; returns false on failure.
+    fn scatter<R: Rng + ?Sized>(&self, rng: &mut R, path: &mut Path, i: usize) -> bool {
+        let v = path.vertices[i];
+        let wo = direction(v.position(), path.vertices[i - 1].position());
+        let u = [rng.random(), rng.random(), rng.random()];
+        let Some(s) = self.scene.sample(&v.point, wo, u) else {
+            return false;
+        };
+        if s.pdf.is_nan() || s.pdf <= 0.0 {
+            return false;
+        }
+        path.vertices[i].specular = s.lobe;
+        let Some(hit) = self.scene.intersect(v.position(), s.wi) else {
+            return false;
+        };
+        path.vertices.push(Vertex {
+            point: hit,
+            specular: None,
+        });
+        true
+    }
+
+    /// Log density of the walk prefix: camera ray and the scattering at vertices
+    /// `1..last`, producing vertices `1..=last`.
+    fn log_walk_density(&self, path: &Path, last: usize) -> f64 {
+        let v = &path.vertices;
+        let s = self.scene;
+        let w1 = path.primary_direction();
+        let mut log_p =
+            (s.direction_pdf(w1) * solid_angle_to_area(v[0].position(), &v[1].point)).ln();
+        for i in 1..last {
+            let p = &v[i].point;
+            let wo = direction(p.position, v[i - 1].position());
+            let q = match v[i].specular {
+                Some(lobe) => s.specular_pdf(p, wo, lobe),
+                None => {
+                    let wi = direction(p.position, v[i + 1].position());
+                    s.pdf(p, wo, wi) * solid_angle_to_area(p.position, &v[i + 1].point)
+                }
+            };
+            log_p += q.ln();
+        }
+        log_p
+    }
+}
+
+impl<S: PathScene + ?Sized> IndependentSampler for UnidirectionalSampler<'_, S> {
+    fn sample<R: Rng + ?Sized>(&self, rng: &mut R, path: &mut Path) -> bool {
+        let scene = self.scene;
+        path.vertices.clear();
+        let n = rng.random_range(1..=self.params.max_segments);
+        let connect = rng.random::<f64>() < self.connect_probability(n);
+        let origin = scene.origin();
+        let cam = SurfacePoint {
+            position: origin,
+            shading_normal: scene.direction([0.5, 0.5]),
+            geometric_normal: scene.direction([0.5, 0.5]),
+            material: u32::MAX,
+        };
+        path.vertices.push(Vertex {
+            point: cam,
+            specular: None,
+        });
+        let raster = [rng.random(), rng.random()];
+        let Some(hit) = scene.intersect(origin, scene.direction(raster)) else {
+            return false;
+        };
+        path.vertices.push(Vertex {
+            point: hit,
+            specular: None,
+        });
+        let walk_edges = if connect { n - 1 } else { n };
+        for i in 1..walk_edges {
+            if !self.scatter(rng, path, i) {
+                return false;
+            }
+        }
+        if connect {
+            let last = path.vertices[n - 1];
+            if scene.is_specular(&last.point) {
+                return false;
+            }
+            let u = [rng.random(), rng.random(), rng.random()];
+            let Some((light, pdf)) = scene.sample_emitter(u) else {
+                return false;
+            };
+            if pdf.is_nan() || pdf <= 0.0 || !scene.visible(last.position(), light.position) {
+                return false;
+            }
+            path.vertices.push(Vertex {
+                point: light,
+                specular: None,
+            });
+        }
+        let end = path.vertices[n].point;
+        scene.is_emitter(&end) && path.raster(scene).is_some()
+    }
+
+    fn log_density(&self, path: &Path) -> f64 {
+        let v = &path.vertices;
+        let k = v.len();
+        let n = k.saturating_sub(1);
+        if n == 0 || n > self.params.max_segments || path.raster(self.scene).is_none() {
+            return f64::NEG_INFINITY;
+        }
+        let c = self.connect_probability(n);
+        let log_n = (self.params.max_segments as f64).ln();
+        let hit = if c < 1.0 {
+            (1.0 - c).ln() + self.log_walk_density(path, k - 1)
+        } else {
+            f64::NEG_INFINITY
+        };
+        let connect = if c > 0.0 && !v[k - 2].is_specular() {
+            c.ln()
+                + self.log_walk_density(path, k - 2)
+                + self.scene.emitter_pdf(&v[k - 1].point).ln()
+        } else {
+            f64::NEG_INFINITY
+        };
+        mcmc_core::proposal::log_sum_exp(&[hit, connect]) - log_n
+    }
+}

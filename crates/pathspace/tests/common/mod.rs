@@ -1,0 +1,29 @@
+//! Helpers shared by the integration tests: seeded RNGs, path draws, statistics.
+#![allow(dead_code)]
+
+use pathspace::{IndependentSampler, Path};
+use rand::SeedableRng;
+
+/// A seeded test RNG.
+pub(crate) fn rng(seed: u64) -> rand_pcg::Pcg64 {
+    rand_pcg::Pcg64::seed_from_u64(seed)
+}
+
+/// Draws a valid path (retrying failed samples).
+pub(crate) fn draw<Smp: IndependentSampler, R: rand::Rng>(sampler: &Smp, rng: &mut R) -> Path {
+    let mut p = Path::new();
+    for _ in 0..100_000 {
+        if sampler.sample(rng, &mut p) {
+            return p;
+        }
+    }
+    panic!("the sampler failed 100000 times in a row");
+}
+
+/// Mean and standard error of independent replicates.
+pub(crate) fn mean_and_se(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
