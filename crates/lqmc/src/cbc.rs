@@ -2,8 +2,8 @@
 //! worst-case error `P_alpha` (alpha = 2) of a weighted Korobov space with product weights.
 //!
 //! Paper section 3.4 ("Local sampling"): generator vectors for N = 7, 23, 97, 313 and
-//! s = 1..21, computed with the CBC construction of Nuyens & Cools [NC06]. This is the plain
-//! `O(s N^2)` CBC (Sloan & Reztsov 2002), not the FFT-based fast CBC of [NC06]: for N <= 313 it
+//! s = 1..21, computed with the CBC construction of Nuyens & Cools \[NC06\]. This is the plain
+//! `O(s N^2)` CBC (Sloan & Reztsov 2002), not the FFT-based fast CBC of \[NC06\]: for N <= 313 it
 //! runs in milliseconds and gives the same minimiser.
 
 use crate::error::LqmcError;
@@ -31,7 +31,7 @@ pub const TABLE_WEIGHT_DECAY: f64 = 0.9;
 /// criterion the CBC construction minimises.
 ///
 /// The squared worst-case error of the rank-1 lattice rule with `N` points and generator `g` is
-/// (Sloan & Joe 1994; [NC06] eq. 2)
+/// (Sloan & Joe 1994; \[NC06\] eq. 2)
 ///
 /// `P_2(g) = -1 + (1/N) sum_{k=0}^{N-1} prod_{j=1}^{s} (1 + gamma_j omega({k g_j / N}))`,
 /// `omega(x) = 2 pi^2 (x^2 - x + 1/6)`,

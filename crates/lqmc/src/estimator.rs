@@ -252,8 +252,12 @@ impl LocalQmc {
     /// Member `j` of `set` in primary sample space: `T^{-1}({r_j + Delta})` (Alg. 1 line 7).
     pub fn member(&self, set: &LocalSet, j: u32, u_bar: &mut [f64]) {
         let mut t = vec![0.0; self.dims()];
-        set.shifted.member(&self.lattice, j, &mut t);
-        self.tiling.invert(&set.tile, &t, u_bar);
+        self.member_into(set, j, &mut t, u_bar);
+    }
+
+    fn member_into(&self, set: &LocalSet, j: u32, t: &mut [f64], u_bar: &mut [f64]) {
+        set.shifted.member(&self.lattice, j, t);
+        self.tiling.invert(&set.tile, t, u_bar);
     }
 
     /// Explores the seed with explored random numbers `u_bar` and its own [`Rebuilt`] `seed`
@@ -279,6 +283,7 @@ impl LocalQmc {
             rejected: 0,
         };
         let mut u_j = vec![0.0; self.dims()];
+        let mut t_j = vec![0.0; self.dims()];
         let mut seed = Some(seed);
         // First pass (lines 5-13): rebuild, keep P/J in `weight`, accumulate S.
         let mut sum = 0.0;
@@ -286,7 +291,7 @@ impl LocalQmc {
             let rebuilt = if j == seed_index {
                 seed.take()
             } else {
-                self.member(&set, j, &mut u_j);
+                self.member_into(&set, j, &mut t_j, &mut u_j);
                 integrand.rebuild(&u_j)
             };
             let Some(r) =

@@ -2,7 +2,7 @@
 //! randomly digit-permuted or Owen-scrambled), then a stateless hash-based PRNG.
 //!
 //! Paper section 3.4 ("Seed sampling"): seed paths are driven by the Halton sequence as
-//! implemented by Grünschloß et al. [GRK12] (which uses Faure's digit permutations) up to 256
+//! implemented by Grünschloß et al. \[GRK12\] (which uses Faure's digit permutations) up to 256
 //! dimensions and by a PRNG (the Mersenne twister in the paper) after that.
 
 use crate::hash::{hash_words, permute, unit_f64};
@@ -73,13 +73,13 @@ pub fn radical_inverse(base: u32, mut index: u64) -> f64 {
     (reversed as f64 / base_pow as f64).min(ONE_MINUS_EPSILON)
 }
 
-/// How the digits of each radical inverse are permuted (paper section 3.4; [GRK12] uses Faure's).
+/// How the digits of each radical inverse are permuted (paper section 3.4; \[GRK12\] uses Faure's).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum Scrambling {
     /// The plain radical inverse.
     #[default]
     None,
-    /// Faure's deterministic permutation per base (Faure 1992; the permutations of [GRK12]'s
+    /// Faure's deterministic permutation per base (Faure 1992; the permutations of \[GRK12\]'s
     /// Halton implementation): one permutation `sigma_b` for every digit, `sigma_b(0) = 0`.
     Faure,
     /// A pseudo-random permutation per (seed, dimension, digit position): a random digit

@@ -11,7 +11,7 @@
 //! |---|---|
 //! | [`Halton`], [`radical_inverse`], [`Scrambling`] | seed sampling, section 3.4 |
 //! | [`Rank1Lattice`], [`Rank1Lattice::closest_point`] | eq. 2; Alg. 1 line 3 |
-//! | [`KorobovSpace`] (`P_alpha`, CBC), embedded tables ([`Rank1Lattice::from_table`]) | section 3.4, [NC06] |
+//! | [`KorobovSpace`] (`P_alpha`, CBC), embedded tables ([`Rank1Lattice::from_table`]) | section 3.4, \[NC06\] |
 //! | [`ShiftedLattice`] | eq. 3, Cranley-Patterson shift, Fig. 3 |
 //! | [`Tiling`] | eq. 12, jittered tiling of section 3.4 |
 //! | [`LocalQmc`], [`LocalIntegrand`], [`Rebuilt`], [`Splat`] | Alg. 1, eq. 8-9 |
