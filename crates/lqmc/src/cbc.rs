@@ -332,4 +332,23 @@ mod tests {
             );
         }
     }
+
+    /// Where the authors' table (reference notes, section 4) has the entries we know, ours
+    /// agrees: N = 23 gives (1, 7, 5) and (1, 7, 5, 3), N = 313 gives (1, 121, 82), exactly;
+    /// N = 7 gives (1, 2, 3), the authors' (1, 3, 2) with dimensions 2 and 3 swapped (same
+    /// P_2). N = 97 differs: ours (1, 35, 41) has a smaller P_2 than their (1, 36, 45) under
+    /// our weights (their weights are not published).
+    #[test]
+    fn agrees_with_the_authors_table_in_3d_and_4d() {
+        let g = |n: u32, s: usize| {
+            KorobovSpace::table(crate::TABLE_MAX_DIMS).cbc(n).unwrap()[..s].to_vec()
+        };
+        assert_eq!(g(23, 3), [1, 7, 5]);
+        assert_eq!(g(23, 4), [1, 7, 5, 3]);
+        assert_eq!(g(313, 3), [1, 121, 82]);
+        assert_eq!(g(7, 3), [1, 2, 3]);
+        let space = KorobovSpace::table(3);
+        let ours = space.worst_case_error_squared(97, &g(97, 3));
+        assert!(ours < space.worst_case_error_squared(97, &[1, 36, 45]));
+    }
 }
