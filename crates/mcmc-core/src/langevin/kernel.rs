@@ -286,13 +286,24 @@ where
     where
         Sp: LangevinSpace<S>,
     {
+        let mut adaptation = self.adaptation.clone();
+        self.log_mala_density_with(&mut adaptation, from, grad_from, to)
+    }
+
+    /// As [`Langevin::log_mala_density`], forming the Gaussian with `adaptation` (the kernel
+    /// forms the forward Gaussian, then the reverse one, with the same object; `log_flow`
+    /// does the same, so that an adaptation whose reverse differs is seen by the pairwise
+    /// check).
+    fn log_mala_density_with<S>(&self, adaptation: &mut A, from: &S, grad_from: &[f64], to: &S) -> f64
+    where
+        Sp: LangevinSpace<S>,
+    {
         let (mut u, mut v) = (Vec::new(), Vec::new());
         self.space.read(from, &mut u);
         self.space.read(to, &mut v);
         if u.len() != v.len() {
             return f64::NEG_INFINITY;
         }
-        let mut adaptation = self.adaptation.clone();
         let mut q = ProposalGaussian::default();
         adaptation.gaussian(&self.params, &u, grad_from, &mut q);
         self.space.log_q(&q, &u, &v)
@@ -484,8 +495,9 @@ where
         if p_mala > 0.0 {
             let gx = gradient_of(target, x, &self.params);
             let gy = gradient_of(target, y, &self.params);
-            let fwd = self.log_mala_density(&x.state, &gx, &y.state);
-            let rev = self.log_mala_density(&y.state, &gy, &x.state);
+            let mut adaptation = self.adaptation.clone();
+            let fwd = self.log_mala_density_with(&mut adaptation, &x.state, &gx, &y.state);
+            let rev = self.log_mala_density_with(&mut adaptation, &y.state, &gy, &x.state);
             terms.push(
                 p_mala.ln()
                     + x.log_density

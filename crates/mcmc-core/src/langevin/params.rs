@@ -39,10 +39,11 @@ pub struct LangevinParams {
     /// Uniform preconditioning weight `delta` (eq. 11, 24). Paper: 0.001.
     pub delta: f64,
     /// Diminishing-adaptation exponent `c1` of the preconditioner (eq. 19). The paper gives no
-    /// value; ours: 0.25 (see [`crate::langevin::Online`] for the reading of eq. 19).
+    /// value; ours: 0.5, the usual stochastic-approximation rate (Andrieu & Thoms 2008). See
+    /// [`crate::langevin::Online`] for the reading of eq. 19.
     pub c1: f64,
     /// Diminishing-adaptation exponent `c2` of the momentum (eq. 20). The paper gives no value;
-    /// ours: 0.25.
+    /// ours: 0.5.
     pub c2: f64,
     /// Cache query radius `r` (eq. 22). Paper: 0.01.
     pub radius: f64,
@@ -63,7 +64,7 @@ pub struct LangevinParams {
 impl LangevinParams {
     /// The paper's settings (section 7, "Parameter settings"): `alpha = 0.9`,
     /// `beta = 0.999`, `delta = 0.001`, `epsilon = 0.01`, `r = 0.01`, `K = 30`, `H = 10 000`,
-    /// truncation 100; `c1 = c2 = 0.25` (not given in the paper); no clamp, no shrink prior.
+    /// truncation 100; `c1 = c2 = 0.5` (not given in the paper); no clamp, no shrink prior.
     #[must_use]
     pub const fn luan2020() -> Self {
         Self {
@@ -72,8 +73,8 @@ impl LangevinParams {
             alpha: 0.9,
             beta: 0.999,
             delta: 0.001,
-            c1: 0.25,
-            c2: 0.25,
+            c1: 0.5,
+            c2: 0.5,
             radius: 0.01,
             neighbours: 30,
             cache_size: 10_000,
