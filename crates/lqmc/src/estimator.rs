@@ -44,6 +44,57 @@ pub struct Rebuilt<P> {
 /// consistent over the whole set.
 ///
 /// Closures `FnMut(&[f64]) -> Option<Rebuilt<P>>` implement it.
+///
+/// # Example
+///
+/// A two-vertex "path": the explored prefix is a position `x` drawn with density `2x` from
+/// `u_bar[0]` (so `J = 2x`), the static suffix is a fixed light sample `y` with density 1;
+/// the class is "x lies on the same side of 0.5 as the seed's", and the payload is a pixel.
+///
+/// ```
+/// use lqmc::{LocalIntegrand, LocalQmc, Rank1Lattice, Rebuilt, Tiling};
+///
+/// struct TwoVertexPath {
+///     y: f64,          // static suffix (not explored)
+///     seed_side: bool, // the seed's class
+/// }
+///
+/// impl TwoVertexPath {
+///     fn trace(&self, u: f64) -> Rebuilt<usize> {
+///         let x = u.sqrt();
+///         let f = if x + self.y > 1.0 { 1.0 } else { 0.25 };
+///         Rebuilt {
+///             payload: (x * 8.0) as usize, // pixel of an 8-pixel image
+///             contribution: f,
+///             prefix_jacobian: 2.0 * x,
+///             density: 2.0 * x, // times the suffix density 1
+///             breakup_probability: 1.0,
+///         }
+///     }
+/// }
+///
+/// impl LocalIntegrand for TwoVertexPath {
+///     type Payload = usize;
+///     fn rebuild(&mut self, u_bar: &[f64]) -> Option<Rebuilt<usize>> {
+///         let x = u_bar[0].sqrt();
+///         ((x < 0.5) == self.seed_side).then(|| self.trace(u_bar[0]))
+///     }
+/// }
+///
+/// let lqmc = LocalQmc::new(
+///     Rank1Lattice::from_table(7, 1).unwrap(),
+///     Tiling::new(vec![2]).unwrap(),
+/// )
+/// .unwrap();
+/// let u = [0.6, 0.3]; // u[0] explored, u[1] the suffix
+/// let mut path = TwoVertexPath { y: u[1], seed_side: u[0].sqrt() < 0.5 };
+/// let seed = path.trace(u[0]);
+/// let mut splats = Vec::new();
+/// let stats = lqmc.explore(&u[..1], seed, &mut path, &mut splats);
+/// assert_eq!(stats.members + stats.rejected, 7);
+/// // Seven splats spread over the pixels of the seed's tile.
+/// assert!(splats.iter().all(|s| s.payload >= 4));
+/// ```
 pub trait LocalIntegrand {
     /// The caller data carried from [`Rebuilt::payload`] to [`Splat::payload`].
     type Payload;
@@ -265,8 +316,9 @@ impl LocalQmc {
     /// positive weight to `splats` (Alg. 1 with the breakup probability; see the type docs).
     ///
     /// Members whose `rebuild` returns `None` or a non-finite or non-positive
-    /// `prefix_jacobian` are rejected. If the seed itself has zero density or breakup
-    /// probability nothing is appended.
+    /// `prefix_jacobian` are rejected. Members with zero weight are not appended. If
+    /// `S = sum_k P(b|X_k) p_t(X_k) / J_k` is zero or not finite (a seed the sampler could not
+    /// have produced), nothing is appended.
     pub fn explore<I: LocalIntegrand>(
         &self,
         u_bar: &[f64],
