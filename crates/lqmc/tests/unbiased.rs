@@ -162,3 +162,56 @@ fn the_exact_value_is_right() {
     let (mean, z) = z_score(&xs);
     assert!(z.abs() < 4.0, "mean {mean}, z {z}");
 }
+
+/// A second integrand: six dimensions, the first five explored with the N = 97 lattice in
+/// tiles (2, 24, 1, 50, 3) with jitter, every coordinate warped with density `0.5 + x`,
+/// `f = prod_{d<5} [x_d < a_d] + [x0 > x1] x5` (exact `prod a_d + 0.25`), a fixed breakup
+/// point and one class.
+#[test]
+fn lqmc_is_unbiased_in_five_explored_dimensions() {
+    const A: [f64; 5] = [0.3, 0.7, 0.55, 0.9, 0.45];
+    let exact = A.iter().product::<f64>() + 0.25;
+    let warp = |u: f64| (-1.0 + (1.0 + 8.0 * u).sqrt()) / 2.0;
+    let path = |u: &[f64; 6]| {
+        let x = u.map(warp);
+        let q = x.map(|x| 0.5 + x);
+        let box_ = A.iter().zip(&x).all(|(a, x)| x < a);
+        let f = f64::from(u8::from(box_)) + if x[0] > x[1] { x[5] } else { 0.0 };
+        Rebuilt {
+            payload: (),
+            contribution: f,
+            prefix_jacobian: q[..5].iter().product(),
+            density: q.iter().product(),
+            breakup_probability: 1.0,
+        }
+    };
+    let mut qmc = LocalQmc::new(
+        Rank1Lattice::from_table(97, 5).unwrap(),
+        Tiling::new(vec![2, 24, 1, 50, 3]).unwrap(),
+    )
+    .unwrap();
+    let mut rng = Pcg64::seed_from_u64(11);
+    let mut splats = Vec::new();
+    let mut xs = Vec::new();
+    for i in 0..50_000 {
+        if i % PROGRESSION == 0 {
+            let jitter: Vec<f64> = (0..5).map(|_| uniform(&mut rng)).collect();
+            qmc.set_jitter(&jitter).unwrap();
+        }
+        let u: [f64; 6] = std::array::from_fn(|_| uniform(&mut rng));
+        let mut integrand = |v: &[f64]| {
+            let mut w = u;
+            w[..5].copy_from_slice(v);
+            Some(path(&w))
+        };
+        splats.clear();
+        qmc.explore(&u[..5], path(&u), &mut integrand, &mut splats);
+        xs.push(splats.iter().map(|s| s.value).sum::<f64>());
+    }
+    let n = xs.len() as f64;
+    let mean = xs.iter().sum::<f64>() / n;
+    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let z = (mean - exact) / (var / n).sqrt();
+    println!("5 explored dims: mean {mean:.5} (exact {exact:.5}), z = {z:.2}");
+    assert!(z.abs() < 4.0, "mean {mean}, exact {exact}, z {z}");
+}
