@@ -34,7 +34,7 @@ use proptest::strategy::BoxedStrategy;
 use rand::{Rng, RngExt, SeedableRng};
 
 /// Stationarity tests in this file that must pass (Sidak correction). Keep in sync.
-const STATIONARITY_TESTS: usize = 24;
+const STATIONARITY_TESTS: usize = 26;
 const STARTS: usize = 10_000;
 const STEPS: u64 = 20;
 
@@ -51,18 +51,30 @@ impl UniformBox {
         Self { lo, hi }
     }
     fn log_volume(&self) -> f64 {
-        self.lo.iter().zip(&self.hi).map(|(l, h)| (h - l).ln()).sum()
+        self.lo
+            .iter()
+            .zip(&self.hi)
+            .map(|(l, h)| (h - l).ln())
+            .sum()
     }
 }
 
 impl Proposal<Vec<f64>> for UniformBox {
     fn propose<R: Rng + ?Sized>(&self, _x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut R) -> Proposed {
         y.clear();
-        y.extend(self.lo.iter().zip(&self.hi).map(|(l, h)| l + (h - l) * rng.random::<f64>()));
+        y.extend(
+            self.lo
+                .iter()
+                .zip(&self.hi)
+                .map(|(l, h)| l + (h - l) * rng.random::<f64>()),
+        );
         Proposed::hastings(0.0)
     }
     fn log_q(&self, _from: &Vec<f64>, to: &Vec<f64>) -> f64 {
-        let inside = to.iter().zip(self.lo.iter().zip(&self.hi)).all(|(v, (l, h))| v >= l && v <= h);
+        let inside = to
+            .iter()
+            .zip(self.lo.iter().zip(&self.hi))
+            .all(|(v, (l, h))| v >= l && v <= h);
         if inside {
             -self.log_volume()
         } else {
@@ -117,7 +129,12 @@ where
     T: Target<State = Vec<f64>>,
     K: Kernel<T> + Clone,
 {
-    let near = assert_path_balance(target, kernel, near_pairs(toy, scale), &PairwiseParams::with_seed(seed));
+    let near = assert_path_balance(
+        target,
+        kernel,
+        near_pairs(toy, scale),
+        &PairwiseParams::with_seed(seed),
+    );
     let report = stationarity_test(
         target,
         kernel,
@@ -133,15 +150,26 @@ where
 }
 
 fn params(epsilon: f64) -> LangevinParams {
-    LangevinParams { epsilon, cache_size: 400, ..LangevinParams::luan2020() }
+    LangevinParams {
+        epsilon,
+        cache_size: 400,
+        ..LangevinParams::luan2020()
+    }
 }
 
 /// Every adaptation on one Euclidean toy: plain; online with and without diminishing
 /// adaptation (frozen after a warm-up); online after a long run (t = 10^6, adapting); full
 /// online; cache-driven with a partial (frozen) and a full cache; hybrid in both stages.
 /// Each is mixed with a large step (p 0.1) and a fallback walk (p 0.1).
-fn check_all_euclidean<T>(name: &str, target: &T, toy: &impl ToyTarget, epsilon: f64, start: Vec<f64>, seed: u64, full: bool)
-where
+fn check_all_euclidean<T>(
+    name: &str,
+    target: &T,
+    toy: &impl ToyTarget,
+    epsilon: f64,
+    start: Vec<f64>,
+    seed: u64,
+    full: bool,
+) where
     T: DifferentiableTarget<State = Vec<f64>>,
 {
     let p = params(epsilon);
@@ -152,20 +180,46 @@ where
             .unwrap()
             .with_large_step(large.clone(), 0.1)
             .unwrap()
-            .with_fallback(fallback.clone(), 0.1)
+            .with_fallback(fallback, 0.1)
             .unwrap()
     };
     let variants: Vec<(&str, AnyAdaptation, u64)> = vec![
         ("plain", AnyAdaptation::Plain(Plain), 0),
         ("online (DA)", AnyAdaptation::Online(Online::new(true)), 500),
-        ("online (no DA)", AnyAdaptation::Online(Online::new(false)), 500),
-        ("cache (partial)", AnyAdaptation::Cache(CacheDriven::new(&p)), 150),
-        ("cache (full)", AnyAdaptation::Cache(CacheDriven::new(&p)), 3000),
-        ("hybrid (online stage)", AnyAdaptation::Hybrid(Hybrid::new(&p)), 150),
-        ("hybrid (cache stage)", AnyAdaptation::Hybrid(Hybrid::new(&p)), 3000),
+        (
+            "online (no DA)",
+            AnyAdaptation::Online(Online::new(false)),
+            500,
+        ),
+        (
+            "cache (partial)",
+            AnyAdaptation::Cache(CacheDriven::new(&p)),
+            150,
+        ),
+        (
+            "cache (full)",
+            AnyAdaptation::Cache(CacheDriven::new(&p)),
+            3000,
+        ),
+        (
+            "hybrid (online stage)",
+            AnyAdaptation::Hybrid(Hybrid::new(&p)),
+            150,
+        ),
+        (
+            "hybrid (cache stage)",
+            AnyAdaptation::Hybrid(Hybrid::new(&p)),
+            3000,
+        ),
     ];
     for (i, (label, adaptation, warmup)) in variants.into_iter().enumerate() {
-        let mut kernel = warmed(target, build(adaptation), start.clone(), warmup, seed + i as u64);
+        let mut kernel = warmed(
+            target,
+            build(adaptation),
+            start.clone(),
+            warmup,
+            seed + i as u64,
+        );
         kernel.freeze();
         if label.starts_with("cache (full)") || label.starts_with("hybrid (cache") {
             let view = match &kernel.adaptation {
@@ -173,16 +227,35 @@ where
                 AnyAdaptation::Hybrid(h) => h.cache(),
                 _ => unreachable!(),
             };
-            assert!(view.is_full(), "{label}: the cache should be full after {warmup} steps ({} entries)", view.len());
+            assert!(
+                view.is_full(),
+                "{label}: the cache should be full after {warmup} steps ({} entries)",
+                view.len()
+            );
         }
         // With `full`, every variant also runs the stationarity test; otherwise only the
         // plain kernel does (keeps the file's test count bounded) and the others are checked
         // pairwise, with stationarity on the ridge and the torus.
         if full || label == "plain" {
-            check(&format!("{name} / {label}"), target, toy, &kernel, epsilon.sqrt(), seed + 100 + i as u64);
+            check(
+                &format!("{name} / {label}"),
+                target,
+                toy,
+                &kernel,
+                epsilon.sqrt(),
+                seed + 100 + i as u64,
+            );
         } else {
-            let r = assert_path_balance(target, &kernel, near_pairs(toy, epsilon.sqrt()), &PairwiseParams::with_seed(seed + 200 + i as u64));
-            eprintln!("{name} / {label}: pairwise {}/{} informative (worst {:.1e})", r.informative, r.cases, r.worst_log_difference);
+            let r = assert_path_balance(
+                target,
+                &kernel,
+                near_pairs(toy, epsilon.sqrt()),
+                &PairwiseParams::with_seed(seed + 200 + i as u64),
+            );
+            eprintln!(
+                "{name} / {label}: pairwise {}/{} informative (worst {:.1e})",
+                r.informative, r.cases, r.worst_log_difference
+            );
         }
     }
 }
@@ -214,7 +287,13 @@ impl Adaptation for AnyAdaptation {
     fn needs_gradient(&self) -> bool {
         each!(self, a => a.needs_gradient())
     }
-    fn gaussian(&mut self, p: &LangevinParams, u: &[f64], g: &[f64], out: &mut ProposalGaussian) -> bool {
+    fn gaussian(
+        &mut self,
+        p: &LangevinParams,
+        u: &[f64],
+        g: &[f64],
+        out: &mut ProposalGaussian,
+    ) -> bool {
         each!(self, a => a.gaussian(p, u, g, out))
     }
     fn adapt(&mut self, p: &LangevinParams, u: &[f64], g: &[f64], first: bool) {
@@ -253,7 +332,13 @@ fn disconnected_mixture_every_adaptation() {
 fn full_preconditioning_on_the_ridge() {
     let t = Ridge::thin();
     let p = params(0.004);
-    let mut kernel = warmed(&t, Langevin::new(p, FullOnline::new(true), Euclidean).unwrap(), vec![0.0, 0.0], 500, 40);
+    let mut kernel = warmed(
+        &t,
+        Langevin::new(p, FullOnline::new(true), Euclidean).unwrap(),
+        vec![0.0, 0.0],
+        500,
+        40,
+    );
     kernel.freeze();
     check("ridge / full online", &t, &t, &kernel, 0.06, 41);
 }
@@ -265,18 +350,39 @@ fn torus_seam_every_adaptation() {
     let toy = TorusMixture::across_seam();
     let t = fd(toy.clone());
     let p = params(0.002);
-    let large = UniformBox { lo: vec![0.0, 0.0], hi: vec![1.0, 1.0] };
+    let large = UniformBox {
+        lo: vec![0.0, 0.0],
+        hi: vec![1.0, 1.0],
+    };
     let variants: Vec<(&str, AnyAdaptation, u64)> = vec![
         ("plain", AnyAdaptation::Plain(Plain), 0),
         ("online (DA)", AnyAdaptation::Online(Online::new(true)), 500),
-        ("cache (full)", AnyAdaptation::Cache(CacheDriven::new(&p)), 3000),
-        ("hybrid (online stage)", AnyAdaptation::Hybrid(Hybrid::new(&p)), 150),
+        (
+            "cache (full)",
+            AnyAdaptation::Cache(CacheDriven::new(&p)),
+            3000,
+        ),
+        (
+            "hybrid (online stage)",
+            AnyAdaptation::Hybrid(Hybrid::new(&p)),
+            150,
+        ),
     ];
     for (i, (label, a, warmup)) in variants.into_iter().enumerate() {
-        let kernel = Langevin::new(p, a, Torus).unwrap().with_large_step(large.clone(), 0.1).unwrap();
+        let kernel = Langevin::new(p, a, Torus)
+            .unwrap()
+            .with_large_step(large.clone(), 0.1)
+            .unwrap();
         let mut kernel = warmed(&t, kernel, vec![0.02, 0.98], warmup, 50 + i as u64);
         kernel.freeze();
-        check(&format!("torus seam / {label}"), &t, &toy, &kernel, 0.05, 60 + i as u64);
+        check(
+            &format!("torus seam / {label}"),
+            &t,
+            &toy,
+            &kernel,
+            0.05,
+            60 + i as u64,
+        );
     }
 }
 
@@ -288,9 +394,22 @@ fn online_after_a_long_run_stays_stationary() {
     let p = params(0.004);
     let mut online = Online::new(true);
     online.set_steps(1_000_000);
-    let kernel = warmed(&t, Langevin::new(p, online, Euclidean).unwrap(), vec![0.0, 0.0], 500, 70);
+    let kernel = warmed(
+        &t,
+        Langevin::new(p, online, Euclidean).unwrap(),
+        vec![0.0, 0.0],
+        500,
+        70,
+    );
     assert!(!kernel.adaptation.is_frozen());
-    check("ridge / online (DA, t = 1e6, adapting)", &t, &t, &kernel, 0.06, 71);
+    check(
+        "ridge / online (DA, t = 1e6, adapting)",
+        &t,
+        &t,
+        &kernel,
+        0.06,
+        71,
+    );
 }
 
 // ---- cheap-then-expensive delayed rejection ----
@@ -302,7 +421,11 @@ fn triples<T: ToyTarget>(toy: &T, s1: f64, s2: f64, wrap: bool) -> BoxedStrategy
     let (lo, hi) = toy.bounding_box();
     let ranges: Vec<_> = lo.iter().zip(&hi).map(|(&l, &h)| l..h).collect();
     let d = lo.len();
-    (ranges, prop::collection::vec(-3.0..3.0f64, d), prop::collection::vec(-3.0..3.0f64, d))
+    (
+        ranges,
+        prop::collection::vec(-3.0..3.0f64, d),
+        prop::collection::vec(-3.0..3.0f64, d),
+    )
         .prop_map(move |(x, a, b)| {
             let y: Vec<f64> = x.iter().zip(&a).map(|(v, n)| w(v + s1 * n)).collect();
             let z: Vec<f64> = x.iter().zip(&b).map(|(v, n)| w(v + s2 * n)).collect();
@@ -316,22 +439,63 @@ fn cheap_then_expensive_balance_and_stationarity() {
     let t = Ridge::thin();
     let p = params(0.004);
     let large = UniformBox::of(&t);
-    for (i, (label, a)) in [("plain", AnyAdaptation::Plain(Plain)), ("online (DA)", AnyAdaptation::Online(Online::new(true)))].into_iter().enumerate() {
-        let kernel = CheapThenExpensive::new(p, 0.5, a, Euclidean).unwrap().with_large_step(large.clone(), 0.1).unwrap();
+    for (i, (label, a)) in [
+        ("plain", AnyAdaptation::Plain(Plain)),
+        ("online (DA)", AnyAdaptation::Online(Online::new(true))),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let kernel = CheapThenExpensive::new(p, 0.5, a, Euclidean)
+            .unwrap()
+            .with_large_step(large.clone(), 0.1)
+            .unwrap();
         let mut kernel = warmed(&t, kernel, vec![0.0, 0.0], 300, 80 + i as u64);
         kernel.adaptation.freeze();
-        let r2 = assert_pairwise_balance(&t, &kernel, near_pairs(&t, 0.5).prop_map(|v| v[0].clone()), &PairwiseParams::with_seed(90 + i as u64));
-        let r3 = assert_path_balance(&t, &kernel, triples(&t, 0.5, 0.06, false), &PairwiseParams::with_seed(91 + i as u64));
+        let r2 = assert_pairwise_balance(
+            &t,
+            &kernel,
+            near_pairs(&t, 0.5).prop_map(|v| v[0].clone()),
+            &PairwiseParams::with_seed(90 + i as u64),
+        );
+        let r3 = assert_path_balance(
+            &t,
+            &kernel,
+            triples(&t, 0.5, 0.06, false),
+            &PairwiseParams::with_seed(91 + i as u64),
+        );
         eprintln!("cheap-then-expensive / {label}: pairs+triples {} informative, triples near {} (worst {:.1e})", r2.informative, r3.informative, r3.worst_log_difference);
-        check(&format!("ridge / cheap-then-expensive ({label})"), &t, &t, &kernel, 0.5, 95 + i as u64);
+        check(
+            &format!("ridge / cheap-then-expensive ({label})"),
+            &t,
+            &t,
+            &kernel,
+            0.5,
+            95 + i as u64,
+        );
     }
     // On the torus, with the ghost wrapping across the seam.
     let toy = TorusMixture::across_seam();
     let tt = fd(toy.clone());
     let kernel = CheapThenExpensive::new(params(0.002), 0.2, Plain, Torus).unwrap();
-    let r = assert_path_balance(&tt, &kernel, triples(&toy, 0.2, 0.05, true), &PairwiseParams::with_seed(97));
-    eprintln!("torus / cheap-then-expensive: triples {} informative", r.informative);
-    check("torus seam / cheap-then-expensive", &tt, &toy, &kernel, 0.2, 98);
+    let r = assert_path_balance(
+        &tt,
+        &kernel,
+        triples(&toy, 0.2, 0.05, true),
+        &PairwiseParams::with_seed(97),
+    );
+    eprintln!(
+        "torus / cheap-then-expensive: triples {} informative",
+        r.informative
+    );
+    check(
+        "torus seam / cheap-then-expensive",
+        &tt,
+        &toy,
+        &kernel,
+        0.2,
+        98,
+    );
 }
 
 // ---- negative controls ----
@@ -353,7 +517,13 @@ impl Adaptation for CodeReverse {
     fn needs_gradient(&self) -> bool {
         true
     }
-    fn gaussian(&mut self, p: &LangevinParams, u: &[f64], g: &[f64], out: &mut ProposalGaussian) -> bool {
+    fn gaussian(
+        &mut self,
+        p: &LangevinParams,
+        u: &[f64],
+        g: &[f64],
+        out: &mut ProposalGaussian,
+    ) -> bool {
         match self.forward_gradient.take() {
             None => {
                 self.forward_gradient = Some(g.to_vec());
@@ -390,7 +560,13 @@ impl Adaptation for NoHastings {
     fn needs_gradient(&self) -> bool {
         true
     }
-    fn gaussian(&mut self, p: &LangevinParams, u: &[f64], g: &[f64], out: &mut ProposalGaussian) -> bool {
+    fn gaussian(
+        &mut self,
+        p: &LangevinParams,
+        u: &[f64],
+        g: &[f64],
+        out: &mut ProposalGaussian,
+    ) -> bool {
         match self.forward.take() {
             None => {
                 Plain.gaussian(p, u, g, out);
@@ -425,28 +601,58 @@ fn fails(f: impl FnOnce()) -> bool {
 fn negative_controls_fail() {
     let t = Ridge::thin();
     let p = params(0.004);
-    let warm = warmed(&t, Langevin::new(p, Online::new(false), Euclidean).unwrap(), vec![0.0, 0.0], 200, 110);
+    let warm = warmed(
+        &t,
+        Langevin::new(p, Online::new(false), Euclidean).unwrap(),
+        vec![0.0, 0.0],
+        200,
+        110,
+    );
     // Not frozen: `CodeReverse` never calls `adapt` on it (its statistics stay as they are),
     // but it advances a copy for the reverse Gaussian.
     let online = warm.adaptation.clone();
     // The exact reverse with these statistics passes (see `ridge / online (no DA)` above);
     // the authors' reverse with the same statistics does not.
-    let code = Langevin::new(p, CodeReverse { inner: online, forward_gradient: None }, Euclidean).unwrap();
+    let code = Langevin::new(
+        p,
+        CodeReverse {
+            inner: online,
+            forward_gradient: None,
+        },
+        Euclidean,
+    )
+    .unwrap();
     assert!(
         fails(|| {
-            assert_path_balance(&t, &code, near_pairs(&t, 0.06), &PairwiseParams::with_seed(111));
+            assert_path_balance(
+                &t,
+                &code,
+                near_pairs(&t, 0.06),
+                &PairwiseParams::with_seed(111),
+            );
         }),
         "the authors' reverse density should fail the pairwise balance"
     );
     let broken = Langevin::new(p, NoHastings { forward: None }, Euclidean).unwrap();
     assert!(
         fails(|| {
-            assert_path_balance(&t, &broken, near_pairs(&t, 0.06), &PairwiseParams::with_seed(112));
+            assert_path_balance(
+                &t,
+                &broken,
+                near_pairs(&t, 0.06),
+                &PairwiseParams::with_seed(112),
+            );
         }),
         "MALA without its Hastings term should fail the pairwise balance"
     );
     // ...and the missing Hastings term biases the chain visibly.
-    let report = stationarity_test(&t, &broken, |rng| t.sample_exact(rng), &t.bins(), &StationarityParams::new(STARTS, 200, 113));
+    let report = stationarity_test(
+        &t,
+        &broken,
+        |rng| t.sample_exact(rng),
+        &t.bins(),
+        &StationarityParams::new(STARTS, 200, 113),
+    );
     eprintln!("negative control, MALA without Hastings term: {report}");
     assert!(
         report.rejects(mcmc_core::testing::sidak_alpha(0.01, STATIONARITY_TESTS)),
@@ -459,9 +665,19 @@ fn negative_controls_fail() {
 #[test]
 fn cache_stops_growing_at_h_and_truncation_applies() {
     let t = Ridge::thin();
-    let p = LangevinParams { cache_size: 123, ..params(0.004) };
+    let p = LangevinParams {
+        cache_size: 123,
+        ..params(0.004)
+    };
     let kernel = Langevin::new(p, CacheDriven::new(&p), Euclidean).unwrap();
-    let mut chain = Chain::new(&t, kernel, NoAdaptation, rand_pcg::Pcg64::seed_from_u64(5), vec![0.0, 0.0]).unwrap();
+    let mut chain = Chain::new(
+        &t,
+        kernel,
+        NoAdaptation,
+        rand_pcg::Pcg64::seed_from_u64(5),
+        vec![0.0, 0.0],
+    )
+    .unwrap();
     chain.run(5000, &mut ()).unwrap();
     let cache = chain.kernel().adaptation.cache();
     assert_eq!(cache.len(), 123);
@@ -545,12 +761,42 @@ const Z_BOUND: f64 = 4.0;
 fn online_without_diminishing_adaptation_is_biased() {
     let (mean, se, z) = ridge_second_moment(false);
     eprintln!("online MALA without DA: E[x0^2] = {mean:.4} +- {se:.4} (exact 0.7506), z = {z:.1}");
-    assert!(z.abs() > Z_BOUND, "expected a bias beyond {Z_BOUND} standard errors, z = {z:.2}");
+    assert!(
+        z.abs() > Z_BOUND,
+        "expected a bias beyond {Z_BOUND} standard errors, z = {z:.2}"
+    );
 }
 
 #[test]
 fn online_with_diminishing_adaptation_is_not_biased() {
     let (mean, se, z) = ridge_second_moment(true);
     eprintln!("online MALA with DA: E[x0^2] = {mean:.4} +- {se:.4} (exact 0.7506), z = {z:.1}");
-    assert!(z.abs() < Z_BOUND, "z = {z:.2} beyond {Z_BOUND} standard errors");
+    assert!(
+        z.abs() < Z_BOUND,
+        "z = {z:.2} beyond {Z_BOUND} standard errors"
+    );
+}
+
+// ---- expected-value splatting ----
+
+#[test]
+fn splat_weights_are_unbiased() {
+    use mcmc_core::testing::{toy_splat_weight_test, SplatParams};
+    let t = Ridge::thin();
+    let p = params(0.004);
+    let large = UniformBox::of(&t);
+    let mala = Langevin::new(p, Plain, Euclidean)
+        .unwrap()
+        .with_large_step(large.clone(), 0.2)
+        .unwrap();
+    let report = toy_splat_weight_test(&t, &mala, &SplatParams::new(20_000, 120));
+    eprintln!("splat weights, MALA + large step: {report}");
+    report.assert_passes("MALA splat weights", STATIONARITY_TESTS);
+    let cte = CheapThenExpensive::new(p, 0.5, Plain, Euclidean)
+        .unwrap()
+        .with_large_step(large, 0.2)
+        .unwrap();
+    let report = toy_splat_weight_test(&t, &cte, &SplatParams::new(20_000, 121));
+    eprintln!("splat weights, cheap-then-expensive: {report}");
+    report.assert_passes("cheap-then-expensive splat weights", STATIONARITY_TESTS);
 }

@@ -24,6 +24,7 @@
 
 mod error;
 mod fresh;
+pub mod langevin;
 mod mutation;
 pub mod noise;
 mod on_layout;

@@ -257,6 +257,16 @@ impl PssState {
         self.observed.clear();
     }
 
+    /// How many primary samples of each stream the last evaluation read through
+    /// [`PssState::next_sample`] (the stream cursors; entries beyond
+    /// [`PssState::streams`] are 0). With a target that reads sequentially, the read set of
+    /// the last evaluation is the prefix `0..read_counts()[s]` of each stream `s`: what
+    /// MALA moves ([`crate::langevin::PssCoordinates`]).
+    #[must_use]
+    pub fn read_counts(&self) -> [usize; MAX_STREAMS] {
+        self.cursor
+    }
+
     /// Rewinds all stream cursors; targets call this before reading a path.
     pub fn begin(&mut self) {
         self.cursor = [0; MAX_STREAMS];

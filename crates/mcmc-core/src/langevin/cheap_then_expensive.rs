@@ -358,7 +358,9 @@ where
                     ghost_evaluated = true;
                     if non_finite(ghost.log_density) {
                         info.non_finite = true;
-                    } else if cz.len() == self.current.coords.len() {
+                    } else if cz.len() == self.current.coords.len()
+                        && self.space.same_layout(&current.state, &z.state)
+                    {
                         self.adaptation
                             .gaussian(&self.params, cz, &self.grad_z, &mut self.reverse);
                         let a1_rev = mh_accept_prob(z.log_density, ghost.log_density, 0.0);

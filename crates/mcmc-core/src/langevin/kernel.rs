@@ -294,7 +294,13 @@ where
     /// forms the forward Gaussian, then the reverse one, with the same object; `log_flow`
     /// does the same, so that an adaptation whose reverse differs is seen by the pairwise
     /// check).
-    fn log_mala_density_with<S>(&self, adaptation: &mut A, from: &S, grad_from: &[f64], to: &S) -> f64
+    fn log_mala_density_with<S>(
+        &self,
+        adaptation: &mut A,
+        from: &S,
+        grad_from: &[f64],
+        to: &S,
+    ) -> f64
     where
         Sp: LangevinSpace<S>,
     {
@@ -418,7 +424,9 @@ where
                 info.non_finite = true;
             } else if y.log_density > f64::NEG_INFINITY {
                 self.space.read(&y.state, &mut self.coords_y);
-                if self.coords_y.len() == ux.len() {
+                if self.coords_y.len() == ux.len()
+                    && self.space.same_layout(&current.state, &y.state)
+                {
                     self.adaptation.gaussian(
                         &self.params,
                         &self.coords_y,

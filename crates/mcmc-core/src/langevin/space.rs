@@ -30,6 +30,14 @@ pub trait LangevinSpace<S> {
     /// Writes the ghost coordinates `z - (y - x)` of generalised delayed rejection into
     /// `out` (wrapped on a torus).
     fn ghost(&self, x: &[f64], y: &[f64], z: &[f64], out: &mut Vec<f64>);
+    /// True if the evaluated candidate `y` has the same coordinate layout as `x` (the same
+    /// coordinates read, hence moved). A candidate whose evaluation read a different set of
+    /// coordinates is rejected: the kernels are exact on each set `{u : R(u) = R(x)}` of
+    /// states with one read set `R` (docs/methods/mala.md). States of fixed dimension: always.
+    fn same_layout(&self, x: &S, y: &S) -> bool {
+        let _ = (x, y);
+        true
+    }
 }
 
 /// Writes `to - from` into a stack buffer (or `spill` beyond 64 dimensions) and calls `f`.

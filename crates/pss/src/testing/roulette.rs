@@ -255,6 +255,18 @@ impl ExactPssTarget for RoulettePath {
     }
 }
 
+/// The density is piecewise constant: gradient 0 on every coordinate read (the order of
+/// [`crate::langevin::PssCoordinates`]), so MALA on it is a Gaussian walk over the current
+/// path's coordinates — what tests its read-set rule on varying path lengths.
+impl mcmc_core::DifferentiableTarget for RoulettePath {
+    fn evaluate_with_grad(&self, x: &mut PssState, payload: &mut (), grad: &mut Vec<f64>) -> f64 {
+        let value = self.evaluate(x, payload);
+        grad.clear();
+        grad.resize(x.read_counts()[0], 0.0);
+        value
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
