@@ -212,7 +212,7 @@ pub fn render(
             reason: e.to_string(),
         })?;
     match settings.integrator {
-        IntegratorKind::Pt => {
+        IntegratorKind::Pt | IntegratorKind::Qmc => {
             Ok(pool.install(|| render_pt(scene, settings, start, progress, cancel)))
         }
         IntegratorKind::Bdpt
@@ -259,7 +259,7 @@ fn bdpt_params(settings: &RenderSettings) -> BdptParams {
     }
 }
 
-/// PT through its driver.
+/// PT and Halton QMC through the PT driver.
 fn render_pt(
     scene: &Scene,
     settings: &RenderSettings,
@@ -274,7 +274,11 @@ fn render_pt(
         budget: settings.budget,
         seed: settings.seed,
     };
-    let out = pt_driver::render_pt(scene, &pt_settings, progress, cancel);
+    let out = if settings.integrator == IntegratorKind::Qmc {
+        crate::integrator::qmc::render_qmc(scene, &pt_settings, progress, cancel)
+    } else {
+        pt_driver::render_pt(scene, &pt_settings, progress, cancel)
+    };
     RenderOutput {
         image: out.image,
         samples: out.samples,

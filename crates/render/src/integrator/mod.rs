@@ -2,8 +2,10 @@
 //! a [`crate::sampler::Sampler`]; multiple-importance-sampling weights shared by them; the
 //! table of integrators ([`INTEGRATORS`]).
 
+pub mod halton_sampler;
 pub mod pt;
 pub mod pt_driver;
+pub mod qmc;
 mod table;
 
 pub use table::{IntegratorInfo, IntegratorKind, INTEGRATORS};

@@ -12,7 +12,7 @@ use super::pt;
 use crate::budget::Budget;
 use crate::film::{tiles, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
-use crate::sampler::IndependentSampler;
+use crate::sampler::{IndependentSampler, Sampler};
 use crate::scene::Scene;
 
 /// Edge length of the square tiles that are the work units of a render (and its merge order).
@@ -76,25 +76,50 @@ pub fn render_pt(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> PtOutput {
-    let start = Instant::now();
+    let seed = settings.seed;
+    render_pixel_samples(
+        scene,
+        settings,
+        progress,
+        cancel,
+        || IndependentSampler::new(seed),
+        |sampler, pixel, sample| sampler.start_pixel_sample(pixel, sample),
+    )
+}
+
+/// [`render_pt`] with any per-pixel sampler: `new_sampler()` makes one sampler per work unit
+/// and `start(sampler, pixel_index, sample_index)` positions it before each pixel sample
+/// (the Halton QMC integrator, [`crate::integrator::qmc`], runs through here). The image is
+/// bit-identical for any thread count if `start` is a pure function of its keys.
+pub fn render_pixel_samples<S, N, B>(
+    scene: &Scene,
+    settings: &PtSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+    new_sampler: N,
+    start: B,
+) -> PtOutput
+where
+    S: Sampler,
+    N: Fn() -> S + Sync,
+    B: Fn(&mut S, u64, u64) + Sync,
+{
     let (w, h) = (settings.width as usize, settings.height as usize);
     let camera = scene.camera_spec().build(settings.width, settings.height);
     let mut film = Film::new(w, h, Filter::BOX);
-    let work = tiles(w, h, TILE_SIZE);
-    let pixels = (w * h) as u64;
 
     // Samples `first..first + count` of every pixel of `rect`, sample index by sample index;
     // stops (returning false with the samples taken so far) when `cancel` is set.
     let render_tile = |rect: PixelRect, first: u32, count: u32| -> (FilmTile, bool) {
         let mut tile = FilmTile::new(w, h, Filter::BOX, rect);
-        let mut sampler = IndependentSampler::new(settings.seed);
+        let mut sampler = new_sampler();
         for s in first..first + count {
             if cancel.load(Ordering::Relaxed) {
                 return (tile, false);
             }
             for y in rect.y0..rect.y1 {
                 for x in rect.x0..rect.x1 {
-                    sampler.start_pixel_sample((y * w + x) as u64, u64::from(s));
+                    start(&mut sampler, (y * w + x) as u64, u64::from(s));
                     let (p, l) = pt::sample_pixel(
                         scene,
                         &camera,
@@ -109,20 +134,69 @@ pub fn render_pt(
         }
         (tile, true)
     };
+    let cancelled = render_passes(
+        settings.width,
+        settings.height,
+        settings.budget,
+        progress,
+        cancel,
+        render_tile,
+        |_, _, done| {
+            for (tile, _) in done.iter().flatten() {
+                film.merge_tile(tile);
+            }
+        },
+    );
+    let (image, overflowed) = film.image_checked(0.0);
+    PtOutput {
+        image,
+        samples: film.samples,
+        dropped_nonfinite: film.nonfinite + overflowed,
+        cancelled,
+    }
+}
 
+/// The tiling, threading, pass, budget, progress and cancellation machinery of the PT driver,
+/// for any per-tile work: returns true if the render was cancelled.
+///
+/// `render_tile(rect, first, count)` renders sample indices `first..first + count` of the
+/// pixels of `rect` (a [`TILE_SIZE`] tile; tiles run in parallel on the current rayon pool)
+/// and returns its result and whether it completed (false: it saw `cancel`).
+/// `end_pass(first, count, results)` receives every tile's result of a pass, in tile order
+/// (`None` for a tile a [`Budget::Time`] render skipped because the deadline had passed), so
+/// merging in that order gives the same bits for any thread count. Passes are as in
+/// [`render_pt`]: doubling up to a sixteenth of a sample budget, or one sample per pixel until
+/// the time budget is spent (the first pass always runs). Progress is in pixel samples; the
+/// tile reports its own progress.
+pub fn render_passes<R, F, M>(
+    width: u32,
+    height: u32,
+    budget: Budget,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+    render_tile: F,
+    mut end_pass: M,
+) -> bool
+where
+    R: Send,
+    F: Fn(PixelRect, u32, u32) -> (R, bool) + Sync,
+    M: FnMut(u32, u32, Vec<Option<(R, bool)>>),
+{
+    let start = Instant::now();
+    let (w, h) = (width as usize, height as usize);
+    let work = tiles(w, h, TILE_SIZE);
+    let pixels = (w * h) as u64;
     let mut cancelled = false;
-    match settings.budget {
+    match budget {
         Budget::SamplesPerPixel(spp) => {
             progress.set_total(pixels * u64::from(spp));
             for (first, count) in passes(spp) {
-                let done: Vec<(FilmTile, bool)> = work
+                let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
-                    .map(|&rect| render_tile(rect, first, count))
+                    .map(|&rect| Some(render_tile(rect, first, count)))
                     .collect();
-                for (tile, complete) in &done {
-                    film.merge_tile(tile);
-                    cancelled |= !complete;
-                }
+                cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
+                end_pass(first, count, done);
                 if cancelled {
                     break;
                 }
@@ -132,17 +206,15 @@ pub fn render_pt(
             let deadline = start + limit;
             let mut pass = 0u32;
             loop {
-                let done: Vec<Option<(FilmTile, bool)>> = work
+                let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
                     .map(|&rect| {
                         let late = pass > 0 && Instant::now() >= deadline;
                         (!late).then(|| render_tile(rect, pass, 1))
                     })
                     .collect();
-                for (tile, complete) in done.iter().flatten() {
-                    film.merge_tile(tile);
-                    cancelled |= !complete;
-                }
+                cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
+                end_pass(pass, 1, done);
                 pass += 1;
                 cancelled |= cancel.load(Ordering::Relaxed);
                 let elapsed = start.elapsed();
@@ -157,13 +229,7 @@ pub fn render_pt(
             }
         }
     }
-    let (image, overflowed) = film.image_checked(0.0);
-    PtOutput {
-        image,
-        samples: film.samples,
-        dropped_nonfinite: film.nonfinite + overflowed,
-        cancelled,
-    }
+    cancelled
 }
 
 /// The passes `(first sample index, samples per pixel)` of a render of `spp` samples per

@@ -19,6 +19,9 @@ pub enum IntegratorKind {
     /// Delayed-rejection MLT (Rioux-Lavoie et al. 2020) over PSSMLT or MMLT
     /// ([`crate::mlt::dr`]).
     Drmlt,
+    /// Halton QMC path tracing: the "Halton points" baseline of Tessari et al.
+    /// ([`crate::integrator::qmc`]).
+    Qmc,
 }
 
 /// One row of the integrator table.
@@ -67,6 +70,12 @@ pub const INTEGRATORS: &[IntegratorInfo] = &[
         description: "delayed-rejection MLT (Rioux-Lavoie et al. 2020): two-stage bold-then-timid kernels (--dr-variant) over PSSMLT or MMLT (--dr-on)",
         is_mcmc: true,
         kind: IntegratorKind::Drmlt,
+    },
+    IntegratorInfo {
+        name: "qmc",
+        description: "path tracing driven by per-pixel Owen-scrambled Halton points (the Halton QMC baseline of Tessari et al.)",
+        is_mcmc: false,
+        kind: IntegratorKind::Qmc,
     },
 ];
 
@@ -128,12 +137,12 @@ mod tests {
         }
         // Every variant has a row; the match has no wildcard arm, so a new variant does not
         // compile here until it is added to `all` (and then needs its row).
-        use IntegratorKind::{Bdpt, Drmlt, Mmlt, Pssmlt, Pt};
-        let all = [Pt, Bdpt, Pssmlt, Mmlt, Drmlt];
+        use IntegratorKind::{Bdpt, Drmlt, Mmlt, Pssmlt, Pt, Qmc};
+        let all = [Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc];
         assert_eq!(all.len(), INTEGRATORS.len());
         for kind in all {
             match kind {
-                Pt | Bdpt | Pssmlt | Mmlt | Drmlt => assert_eq!(kind.info().kind, kind),
+                Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc => assert_eq!(kind.info().kind, kind),
             }
         }
         assert_eq!(INTEGRATORS[0].kind, IntegratorKind::default());

@@ -1,0 +1,227 @@
+//! Samplers for the local quasi-Monte Carlo integrators: the per-pixel scrambled Halton
+//! sampler of the Halton QMC baseline and of LQMC's seed paths, and a sampler that records a
+//! seed path's numbers and replays them with chosen dimensions overridden.
+
+use glam::Vec2;
+use lqmc::{Halton, Scrambling};
+use mcmc_core::seed::mix64;
+
+use crate::sampler::{unit_f32, Sampler, Stream};
+
+/// Dimensions of [`Stream::Light`] and [`Stream::Connection`] start here in the Halton
+/// sampler, beyond the Halton dimensions (they use its hash PRNG); the path tracers draw from
+/// [`Stream::Camera`] only.
+const OTHER_STREAM_OFFSET: usize = 1 << 20;
+
+/// Owen-scrambled Halton points per pixel (Tessari et al., section 3.4 "Seed sampling": the
+/// Halton sequence up to 256 dimensions, then a PRNG, as in [`lqmc::Halton`]).
+///
+/// Sample `i` of pixel `p` is point `i` of a Halton sequence whose Owen scrambling is keyed
+/// by `(seed, p)`: each pixel gets its own randomised QMC sequence, so its first two
+/// dimensions (the position inside the pixel) and every other low dimension are stratified
+/// across the pixel's samples, and the estimate stays unbiased. Dimension `d` of
+/// [`Stream::Camera`] is Halton dimension `d` (the path tracer's layout: pixel 2, lens 2,
+/// time 1, then 7 per bounce).
+///
+/// # Example
+/// ```
+/// use render::integrator::halton_sampler::HaltonSampler;
+/// use render::sampler::Sampler;
+/// let mut s = HaltonSampler::new(3);
+/// s.start_pixel_sample(10, 0);
+/// let a = s.next_1d();
+/// s.start_pixel_sample(10, 0);
+/// assert_eq!(a, s.next_1d());
+/// ```
+#[derive(Clone, Debug)]
+pub struct HaltonSampler {
+    seed_key: u64,
+    halton: Halton,
+    index: u64,
+    stream: usize,
+    dimension: [usize; 3],
+}
+
+impl HaltonSampler {
+    /// A sampler for master seed `seed`, at pixel 0, sample 0.
+    #[must_use]
+    pub fn new(seed: u64) -> Self {
+        let seed_key = mix64(seed ^ 0x4a1f_0c3b_9e77_d2a5);
+        let mut s = Self {
+            seed_key,
+            halton: Halton::new(Scrambling::Owen, seed_key),
+            index: 0,
+            stream: 0,
+            dimension: [0; 3],
+        };
+        s.start_pixel_sample(0, 0);
+        s
+    }
+
+    /// Starts sample `sample_index` of pixel `pixel_index`: point `sample_index` of the
+    /// pixel's scrambled sequence, every stream at its first dimension, [`Stream::Camera`].
+    #[inline]
+    pub fn start_pixel_sample(&mut self, pixel_index: u64, sample_index: u64) {
+        let key = mix64(self.seed_key ^ mix64(pixel_index.wrapping_add(0x9e37_79b9)));
+        if key != self.halton.seed() {
+            self.halton = Halton::new(Scrambling::Owen, key);
+        }
+        self.index = sample_index;
+        self.stream = 0;
+        self.dimension = [0; 3];
+    }
+}
+
+impl Sampler for HaltonSampler {
+    #[inline]
+    fn start_stream(&mut self, stream: Stream) {
+        self.stream = stream.index();
+    }
+
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        let d = self.dimension[self.stream];
+        self.dimension[self.stream] = d + 1;
+        let dim = if self.stream == 0 {
+            d
+        } else {
+            OTHER_STREAM_OFFSET * self.stream + d
+        };
+        // Round down to a float in [0, 1): f64 -> f32 rounding could give 1.0.
+        let x = self.halton.sample(self.index, dim);
+        unit_f32(((x * (1u64 << 24) as f64) as u64) << 40)
+    }
+
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        let x = self.next_1d();
+        Vec2::new(x, self.next_1d())
+    }
+}
+
+/// Records the [`Stream::Camera`] numbers another sampler produces (a seed path), then
+/// replays them with chosen dimensions overridden (a lattice member's explored numbers):
+/// LQMC's "rebuild the prefix from these random numbers" (Alg. 1, lines 7-9).
+///
+/// In [`ReplaySampler::record`] mode every number is drawn from the inner sampler and kept;
+/// in [`ReplaySampler::replay`] mode dimension `d` returns the override if one is set, else
+/// the recorded value, else (past the recording) `0.5`. The buffers are reused across seeds:
+/// no allocation once they have grown.
+#[derive(Clone, Debug, Default)]
+pub struct ReplaySampler<S> {
+    inner: S,
+    recorded: Vec<f32>,
+    overrides: Vec<(usize, f32)>,
+    recording: bool,
+    cursor: usize,
+}
+
+impl<S: Sampler> ReplaySampler<S> {
+    /// A replay sampler around `inner`.
+    #[must_use]
+    pub fn new(inner: S) -> Self {
+        Self {
+            inner,
+            recorded: Vec::new(),
+            overrides: Vec::new(),
+            recording: false,
+            cursor: 0,
+        }
+    }
+
+    /// The inner sampler (to position it before [`ReplaySampler::record`]).
+    pub fn inner_mut(&mut self) -> &mut S {
+        &mut self.inner
+    }
+
+    /// Starts recording a new seed: subsequent numbers come from the inner sampler.
+    pub fn record(&mut self) {
+        self.recorded.clear();
+        self.overrides.clear();
+        self.recording = true;
+        self.cursor = 0;
+    }
+
+    /// Starts replaying the recording with `overrides` (`(dimension, value)` pairs, values in
+    /// `[0, 1)`) in place of the recorded numbers.
+    pub fn replay(&mut self, overrides: impl IntoIterator<Item = (usize, f32)>) {
+        self.overrides.clear();
+        self.overrides.extend(overrides);
+        self.recording = false;
+        self.cursor = 0;
+    }
+
+    /// The recorded numbers of the seed.
+    #[must_use]
+    pub fn recorded(&self) -> &[f32] {
+        &self.recorded
+    }
+}
+
+impl<S: Sampler> Sampler for ReplaySampler<S> {
+    #[inline]
+    fn start_stream(&mut self, stream: Stream) {
+        // The path tracers use one stream; a second one would break the dimension layout.
+        debug_assert_eq!(stream, Stream::Camera);
+        if self.recording {
+            self.inner.start_stream(stream);
+        }
+    }
+
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        let d = self.cursor;
+        self.cursor += 1;
+        if self.recording {
+            let x = self.inner.next_1d();
+            self.recorded.push(x);
+            return x;
+        }
+        if let Some(&(_, v)) = self.overrides.iter().find(|(dim, _)| *dim == d) {
+            return v;
+        }
+        self.recorded.get(d).copied().unwrap_or(0.5)
+    }
+
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        let x = self.next_1d();
+        Vec2::new(x, self.next_1d())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampler::IndependentSampler;
+
+    #[test]
+    fn halton_pixel_sequences_are_stratified_and_keyed() {
+        let mut s = HaltonSampler::new(1);
+        // Base 2 in dimension 0: the first 8 points of a pixel fall one in each eighth.
+        let mut seen = [false; 8];
+        for i in 0..8 {
+            s.start_pixel_sample(5, i);
+            let x = s.next_1d();
+            assert!((0.0..1.0).contains(&x));
+            seen[(x * 8.0) as usize] = true;
+        }
+        assert!(seen.iter().all(|&b| b));
+        s.start_pixel_sample(5, 3);
+        let a = s.next_2d();
+        s.start_pixel_sample(6, 3);
+        assert_ne!(a, s.next_2d());
+    }
+
+    #[test]
+    fn replay_returns_recording_with_overrides() {
+        let mut r = ReplaySampler::new(IndependentSampler::new(4));
+        r.inner_mut().start_pixel_sample(1, 2);
+        r.record();
+        let xs: Vec<f32> = (0..6).map(|_| r.next_1d()).collect();
+        assert_eq!(r.recorded(), &xs[..]);
+        r.replay([(2, 0.25), (4, 0.75)]);
+        let ys: Vec<f32> = (0..7).map(|_| r.next_1d()).collect();
+        assert_eq!(ys, [xs[0], xs[1], 0.25, xs[3], 0.75, xs[5], 0.5]);
+    }
+}
