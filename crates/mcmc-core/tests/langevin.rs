@@ -34,7 +34,8 @@ use proptest::strategy::BoxedStrategy;
 use rand::{Rng, RngExt, SeedableRng};
 
 /// Stationarity tests in this file that must pass (Sidak correction). Keep in sync.
-const STATIONARITY_TESTS: usize = 26;
+const STATIONARITY_TESTS: usize = 40;
+// 3 x 8 Euclidean variants + 7 torus + full ridge + long DA + 3 DR + 2 splat = 38.
 const STARTS: usize = 10_000;
 const STEPS: u64 = 20;
 
@@ -157,6 +158,50 @@ fn params(epsilon: f64) -> LangevinParams {
     }
 }
 
+/// Every adaptation variant with the warm-up (adapting steps before freezing) it is checked
+/// after: plain; online with and without DA; cache partial (frozen before full) and full;
+/// hybrid in its online and its cache stage; full preconditioning (not on a torus: the images
+/// of a full Gaussian do not factorise).
+fn variants(p: &LangevinParams, with_full: bool) -> Vec<(&'static str, AnyAdaptation, u64)> {
+    let mut v = vec![
+        ("plain", AnyAdaptation::Plain(Plain), 0),
+        ("online (DA)", AnyAdaptation::Online(Online::new(true)), 500),
+        (
+            "online (no DA)",
+            AnyAdaptation::Online(Online::new(false)),
+            500,
+        ),
+        (
+            "cache (partial)",
+            AnyAdaptation::Cache(CacheDriven::new(p)),
+            150,
+        ),
+        (
+            "cache (full)",
+            AnyAdaptation::Cache(CacheDriven::new(p)),
+            3000,
+        ),
+        (
+            "hybrid (online stage)",
+            AnyAdaptation::Hybrid(Hybrid::new(p)),
+            150,
+        ),
+        (
+            "hybrid (cache stage)",
+            AnyAdaptation::Hybrid(Hybrid::new(p)),
+            3000,
+        ),
+    ];
+    if with_full {
+        v.push((
+            "full online (no DA)",
+            AnyAdaptation::Full(FullOnline::new(false)),
+            300,
+        ));
+    }
+    v
+}
+
 /// Every adaptation on one Euclidean toy: plain; online with and without diminishing
 /// adaptation (frozen after a warm-up); online after a long run (t = 10^6, adapting); full
 /// online; cache-driven with a partial (frozen) and a full cache; hybrid in both stages.
@@ -183,35 +228,7 @@ fn check_all_euclidean<T>(
             .with_fallback(fallback, 0.1)
             .unwrap()
     };
-    let variants: Vec<(&str, AnyAdaptation, u64)> = vec![
-        ("plain", AnyAdaptation::Plain(Plain), 0),
-        ("online (DA)", AnyAdaptation::Online(Online::new(true)), 500),
-        (
-            "online (no DA)",
-            AnyAdaptation::Online(Online::new(false)),
-            500,
-        ),
-        (
-            "cache (partial)",
-            AnyAdaptation::Cache(CacheDriven::new(&p)),
-            150,
-        ),
-        (
-            "cache (full)",
-            AnyAdaptation::Cache(CacheDriven::new(&p)),
-            3000,
-        ),
-        (
-            "hybrid (online stage)",
-            AnyAdaptation::Hybrid(Hybrid::new(&p)),
-            150,
-        ),
-        (
-            "hybrid (cache stage)",
-            AnyAdaptation::Hybrid(Hybrid::new(&p)),
-            3000,
-        ),
-    ];
+    let variants = variants(&p, true);
     for (i, (label, adaptation, warmup)) in variants.into_iter().enumerate() {
         let mut kernel = warmed(
             target,
@@ -265,6 +282,7 @@ fn check_all_euclidean<T>(
 enum AnyAdaptation {
     Plain(Plain),
     Online(Online),
+    Full(FullOnline),
     Cache(CacheDriven),
     Hybrid(Hybrid),
 }
@@ -274,6 +292,7 @@ macro_rules! each {
         match $self {
             AnyAdaptation::Plain($a) => $e,
             AnyAdaptation::Online($a) => $e,
+            AnyAdaptation::Full($a) => $e,
             AnyAdaptation::Cache($a) => $e,
             AnyAdaptation::Hybrid($a) => $e,
         }
@@ -318,14 +337,14 @@ fn ridge_every_adaptation() {
 #[test]
 fn banana_every_adaptation() {
     let t = Banana::haario(0.03).unwrap();
-    check_all_euclidean("banana", &t, &t, 0.5, vec![0.0, 0.0], 20, false);
+    check_all_euclidean("banana", &t, &t, 0.5, vec![0.0, 0.0], 20, true);
 }
 
 #[test]
 fn disconnected_mixture_every_adaptation() {
     let t = GaussianMixture2d::disconnected();
     let start = t.components()[0].mean.to_vec();
-    check_all_euclidean("mixture", &fd(t.clone()), &t, 0.05, start, 30, false);
+    check_all_euclidean("mixture", &fd(t.clone()), &t, 0.05, start, 30, true);
 }
 
 #[test]
@@ -354,20 +373,7 @@ fn torus_seam_every_adaptation() {
         lo: vec![0.0, 0.0],
         hi: vec![1.0, 1.0],
     };
-    let variants: Vec<(&str, AnyAdaptation, u64)> = vec![
-        ("plain", AnyAdaptation::Plain(Plain), 0),
-        ("online (DA)", AnyAdaptation::Online(Online::new(true)), 500),
-        (
-            "cache (full)",
-            AnyAdaptation::Cache(CacheDriven::new(&p)),
-            3000,
-        ),
-        (
-            "hybrid (online stage)",
-            AnyAdaptation::Hybrid(Hybrid::new(&p)),
-            150,
-        ),
-    ];
+    let variants = variants(&p, false);
     for (i, (label, a, warmup)) in variants.into_iter().enumerate() {
         let kernel = Langevin::new(p, a, Torus)
             .unwrap()
