@@ -303,8 +303,8 @@ impl Adaptation for AnyAdaptation {
     fn name(&self) -> &'static str {
         each!(self, a => a.name())
     }
-    fn needs_gradient(&self) -> bool {
-        each!(self, a => a.needs_gradient())
+    fn needs_gradient(&self, dim: usize) -> bool {
+        each!(self, a => a.needs_gradient(dim))
     }
     fn gaussian(
         &mut self,
@@ -520,7 +520,7 @@ impl Adaptation for CodeReverse {
     fn name(&self) -> &'static str {
         "code-reverse"
     }
-    fn needs_gradient(&self) -> bool {
+    fn needs_gradient(&self, _dim: usize) -> bool {
         true
     }
     fn gaussian(
@@ -563,7 +563,7 @@ impl Adaptation for NoHastings {
     fn name(&self) -> &'static str {
         "no-hastings"
     }
-    fn needs_gradient(&self) -> bool {
+    fn needs_gradient(&self, _dim: usize) -> bool {
         true
     }
     fn gaussian(

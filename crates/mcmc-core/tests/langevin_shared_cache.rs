@@ -125,7 +125,7 @@ fn shared_cache_is_deterministic_bounded_and_correct() {
     let (a, b, c) = (run(1, 0), run(2, 0), run(3, 0));
     assert_eq!(a.sink, b.sink, "1 vs 2 threads");
     assert_eq!(a.sink, c.sink, "1 vs 3 threads");
-    let cache = a.shared.cache.as_ref().expect("chains contributed entries");
+    let cache = a.shared.caches.get(&2).expect("chains contributed entries");
     assert_eq!(cache.len(), H, "the pooled cache stops at H");
     // Entries come from many chains: with 24 chains and rounds of 200 mutations, no chain
     // alone made H distinct MALA steps before the cache filled.

@@ -28,9 +28,9 @@ use super::params::LangevinParams;
 pub trait Adaptation: Clone + Send + std::fmt::Debug {
     /// A short name (`"plain"`, `"online"`, ...).
     fn name(&self) -> &'static str;
-    /// True if [`Adaptation::gaussian`] reads the gradient at the point (false lets a kernel
-    /// skip gradient evaluations, e.g. a frozen full cache).
-    fn needs_gradient(&self) -> bool;
+    /// True if [`Adaptation::gaussian`] at a point of dimension `dim` reads the gradient there
+    /// (false lets a kernel skip gradient evaluations, e.g. a frozen full cache).
+    fn needs_gradient(&self, dim: usize) -> bool;
     /// Forms the proposal Gaussian at `u` with truncated gradient `g` under the current
     /// `theta` (does not change `theta`; `&mut` for scratch buffers).
     fn gaussian(
@@ -49,10 +49,10 @@ pub trait Adaptation: Clone + Send + std::fmt::Debug {
     fn freeze(&mut self);
     /// True once `theta` no longer changes.
     fn is_frozen(&self) -> bool;
-    /// The gradient cache, for adaptations that have one (shared by the render loop through
-    /// [`super::CacheSharing`]).
-    fn cache_mut(&mut self) -> Option<&mut CacheView> {
-        None
+    /// Calls `f` on every gradient cache the adaptation holds (shared by the render loop
+    /// through [`super::CacheSharing`]); none by default.
+    fn for_each_cache(&mut self, f: &mut dyn FnMut(&mut CacheView)) {
+        let _ = f;
     }
 }
 
@@ -74,7 +74,7 @@ impl Adaptation for Plain {
     fn name(&self) -> &'static str {
         "plain"
     }
-    fn needs_gradient(&self) -> bool {
+    fn needs_gradient(&self, _dim: usize) -> bool {
         true
     }
     fn gaussian(
@@ -192,7 +192,7 @@ impl Adaptation for Online {
     fn name(&self) -> &'static str {
         "online"
     }
-    fn needs_gradient(&self) -> bool {
+    fn needs_gradient(&self, _dim: usize) -> bool {
         true
     }
     fn gaussian(
@@ -290,7 +290,7 @@ impl Adaptation for FullOnline {
     fn name(&self) -> &'static str {
         "full-online"
     }
-    fn needs_gradient(&self) -> bool {
+    fn needs_gradient(&self, _dim: usize) -> bool {
         true
     }
     fn gaussian(
@@ -385,7 +385,7 @@ impl Adaptation for CacheDriven {
     fn name(&self) -> &'static str {
         "cache"
     }
-    fn needs_gradient(&self) -> bool {
+    fn needs_gradient(&self, _dim: usize) -> bool {
         !self.view.is_full()
     }
     fn gaussian(
@@ -459,8 +459,8 @@ impl Adaptation for CacheDriven {
     fn is_frozen(&self) -> bool {
         self.frozen || self.view.is_full()
     }
-    fn cache_mut(&mut self) -> Option<&mut CacheView> {
-        Some(&mut self.view)
+    fn for_each_cache(&mut self, f: &mut dyn FnMut(&mut CacheView)) {
+        f(&mut self.view);
     }
 }
 
@@ -506,7 +506,7 @@ impl Adaptation for Hybrid {
     fn name(&self) -> &'static str {
         "hybrid"
     }
-    fn needs_gradient(&self) -> bool {
+    fn needs_gradient(&self, _dim: usize) -> bool {
         self.is_online()
     }
     fn gaussian(
@@ -535,7 +535,91 @@ impl Adaptation for Hybrid {
     fn is_frozen(&self) -> bool {
         self.cache.is_frozen()
     }
-    fn cache_mut(&mut self) -> Option<&mut CacheView> {
-        self.cache.cache_mut()
+    fn for_each_cache(&mut self, f: &mut dyn FnMut(&mut CacheView)) {
+        self.cache.for_each_cache(f);
+    }
+}
+
+/// One adaptation per dimension: a copy of `prototype` is made for each dimension the chain
+/// meets, and the Gaussian at a point uses the copy for the point's dimension. For targets
+/// whose states differ in dimension (primary sample space: paths of different lengths or
+/// MMLT strategies), so that statistics and caches are never mixed across dimensions (the
+/// authors' code keeps one cache per dimension). Each copy adapts only at points of its
+/// dimension; the whole is frozen once every copy made so far is (a new dimension starts a
+/// fresh copy).
+#[derive(Clone, Debug)]
+pub struct PerDimension<A> {
+    prototype: A,
+    entries: Vec<(usize, A)>,
+    frozen: bool,
+}
+
+impl<A: Adaptation> PerDimension<A> {
+    /// Copies of `prototype` per dimension.
+    #[must_use]
+    pub fn new(prototype: A) -> Self {
+        Self {
+            prototype,
+            entries: Vec::new(),
+            frozen: false,
+        }
+    }
+
+    /// The adaptation of dimension `dim`, if the chain met it.
+    #[must_use]
+    pub fn get(&self, dim: usize) -> Option<&A> {
+        self.entries.iter().find(|(d, _)| *d == dim).map(|(_, a)| a)
+    }
+
+    fn entry(&mut self, dim: usize) -> &mut A {
+        let i = match self.entries.iter().position(|(d, _)| *d == dim) {
+            Some(i) => i,
+            None => {
+                let mut a = self.prototype.clone();
+                if self.frozen {
+                    a.freeze();
+                }
+                self.entries.push((dim, a));
+                self.entries.len() - 1
+            }
+        };
+        &mut self.entries[i].1
+    }
+}
+
+impl<A: Adaptation> Adaptation for PerDimension<A> {
+    fn name(&self) -> &'static str {
+        self.prototype.name()
+    }
+    fn needs_gradient(&self, dim: usize) -> bool {
+        self.get(dim).unwrap_or(&self.prototype).needs_gradient(dim)
+    }
+    fn gaussian(
+        &mut self,
+        params: &LangevinParams,
+        u: &[f64],
+        g: &[f64],
+        out: &mut ProposalGaussian,
+    ) -> bool {
+        self.entry(u.len()).gaussian(params, u, g, out)
+    }
+    fn adapt(&mut self, params: &LangevinParams, u: &[f64], g: &[f64], first_visit: bool) {
+        if !self.frozen {
+            self.entry(u.len()).adapt(params, u, g, first_visit);
+        }
+    }
+    fn freeze(&mut self) {
+        self.frozen = true;
+        for (_, a) in &mut self.entries {
+            a.freeze();
+        }
+    }
+    fn is_frozen(&self) -> bool {
+        self.frozen
+    }
+    fn for_each_cache(&mut self, f: &mut dyn FnMut(&mut CacheView)) {
+        for (_, a) in &mut self.entries {
+            a.for_each_cache(f);
+        }
     }
 }

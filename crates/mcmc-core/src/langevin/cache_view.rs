@@ -28,12 +28,12 @@ pub struct CacheView {
     dim: Option<usize>,
 }
 
-/// The cache pooled over all chains of a render loop (the `Shared` value of
-/// [`super::CacheSharing`]).
+/// The caches pooled over all chains of a render loop (the `Shared` value of
+/// [`super::CacheSharing`]): one per dimension.
 #[derive(Clone, Debug, Default)]
 pub struct PooledCache {
-    /// The pooled entries (`None` until a chain contributed).
-    pub cache: Option<Arc<GradientCache>>,
+    /// The pooled entries per dimension (absent until a chain contributed one of it).
+    pub caches: std::collections::BTreeMap<usize, Arc<GradientCache>>,
 }
 
 impl CacheView {
@@ -133,35 +133,26 @@ impl CacheView {
         }
     }
 
-    /// Appends the local entries to `pooled` (until it holds `H`) and clears them.
+    /// Appends the local entries to the pooled cache of their dimension (until it holds `H`)
+    /// and clears them.
     pub fn contribute(&mut self, pooled: &mut PooledCache) {
         if self.local.is_empty() {
             return;
         }
         let Some(d) = self.dim else { return };
-        let cache = pooled.cache.get_or_insert_with(|| Arc::clone(&self.shared));
-        if cache.dim() != d {
-            if cache.is_empty() {
-                *cache = Arc::new(GradientCache::new(d, self.capacity));
-            } else {
-                self.local.clear();
-                return;
-            }
-        }
+        let cache = pooled
+            .caches
+            .entry(d)
+            .or_insert_with(|| Arc::clone(&self.shared));
         Arc::make_mut(cache).extend_from(&self.local);
         self.local.clear();
     }
 
-    /// Installs the pooled cache as this chain's shared snapshot.
+    /// Installs the pooled cache of this view's dimension as its shared snapshot (a view
+    /// whose dimension is not fixed yet stays empty until it meets a point).
     pub fn receive(&mut self, pooled: &PooledCache) {
-        if let Some(cache) = &pooled.cache {
-            if self.dim.is_none() || self.dim == Some(cache.dim()) {
-                self.dim = Some(cache.dim());
-                if self.local.dim() != cache.dim() {
-                    self.local = GradientCache::new(cache.dim(), self.capacity);
-                }
-                self.shared = Arc::clone(cache);
-            }
+        if let Some(cache) = self.dim.and_then(|d| pooled.caches.get(&d)) {
+            self.shared = Arc::clone(cache);
         }
     }
 }

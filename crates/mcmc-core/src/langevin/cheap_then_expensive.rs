@@ -310,7 +310,8 @@ where
 
         // Stage 2: MALA from x (gradient cached), z evaluated with gradient.
         info.stages_tried = 2;
-        let needs_gradient = self.adaptation.needs_gradient();
+        self.space.read(&current.state, cx);
+        let needs_gradient = self.adaptation.needs_gradient(cx.len());
         self.current.ensure(
             target,
             &self.space,
@@ -497,5 +498,11 @@ impl<A, Sp, L> LargeStepTunable for CheapThenExpensive<A, Sp, L> {
     }
     fn is_large_step(&self, component: usize) -> bool {
         component == LARGE_STEP_COMPONENT
+    }
+}
+
+impl<A: Adaptation, Sp, L> super::HasGradientCache for CheapThenExpensive<A, Sp, L> {
+    fn for_each_gradient_cache(&mut self, f: &mut dyn FnMut(&mut super::CacheView)) {
+        self.adaptation.for_each_cache(f);
     }
 }

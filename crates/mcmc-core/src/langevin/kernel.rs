@@ -127,7 +127,7 @@ impl CurrentGradient {
 /// use rand::SeedableRng;
 ///
 /// let target = Ridge::thin();
-/// let params = LangevinParams { epsilon: 0.05, ..LangevinParams::luan2020() };
+/// let params = LangevinParams { epsilon: 0.0025, ..LangevinParams::luan2020() };
 /// let kernel = Langevin::new(params, Online::new(true), Euclidean).unwrap();
 /// let rng = rand_pcg::Pcg64::seed_from_u64(1);
 /// let mut chain = Chain::new(&target, kernel, NoAdaptation, rng, vec![0.0, 0.0]).unwrap();
@@ -385,7 +385,8 @@ where
         }
 
         // MALA step from x with the cached gradient.
-        let needs_gradient = self.adaptation.needs_gradient();
+        self.space.read(&current.state, &mut self.coords_y);
+        let needs_gradient = self.adaptation.needs_gradient(self.coords_y.len());
         self.current.ensure(
             target,
             &self.space,
@@ -551,15 +552,15 @@ impl<A, Sp, L, F> LargeStepTunable for Langevin<A, Sp, L, F> {
     }
 }
 
-/// A kernel whose adaptation owns a gradient cache (for [`super::CacheSharing`]).
+/// A kernel whose adaptation may own gradient caches (for [`super::CacheSharing`]).
 pub trait HasGradientCache {
-    /// The cache, if the adaptation has one.
-    fn gradient_cache_mut(&mut self) -> Option<&mut super::CacheView>;
+    /// Calls `f` on every gradient cache of the kernel.
+    fn for_each_gradient_cache(&mut self, f: &mut dyn FnMut(&mut super::CacheView));
 }
 
 impl<A: Adaptation, Sp, L, F> HasGradientCache for Langevin<A, Sp, L, F> {
-    fn gradient_cache_mut(&mut self) -> Option<&mut super::CacheView> {
-        self.adaptation.cache_mut()
+    fn for_each_gradient_cache(&mut self, f: &mut dyn FnMut(&mut super::CacheView)) {
+        self.adaptation.for_each_cache(f);
     }
 }
 

@@ -29,13 +29,9 @@ impl<K: ?Sized, S> Controller<K, S> for CacheSharing {
 impl<K: HasGradientCache + ?Sized> SharedController<K> for CacheSharing {
     type Shared = PooledCache;
     fn contribute(&mut self, kernel: &mut K, pooled: &mut PooledCache) {
-        if let Some(view) = kernel.gradient_cache_mut() {
-            view.contribute(pooled);
-        }
+        kernel.for_each_gradient_cache(&mut |view| view.contribute(pooled));
     }
     fn receive(&mut self, kernel: &mut K, pooled: &PooledCache) {
-        if let Some(view) = kernel.gradient_cache_mut() {
-            view.receive(pooled);
-        }
+        kernel.for_each_gradient_cache(&mut |view| view.receive(pooled));
     }
 }
