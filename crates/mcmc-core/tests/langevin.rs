@@ -17,8 +17,8 @@
 
 use mcmc_core::delayed_rejection::{Euclidean, Torus};
 use mcmc_core::langevin::{
-    Adaptation, CacheDriven, CheapThenExpensive, FullOnline, Hybrid, Langevin, LangevinParams,
-    LangevinSpace, Online, Plain, ProposalGaussian,
+    Adaptation, AnyAdaptation, CacheDriven, CheapThenExpensive, FullOnline, Hybrid, Langevin,
+    LangevinParams, LangevinSpace, Online, Plain, ProposalGaussian,
 };
 use mcmc_core::testing::{
     assert_pairwise_balance, assert_path_balance, stationarity_test, PairwiseParams,
@@ -274,55 +274,6 @@ fn check_all_euclidean<T>(
                 r.informative, r.cases, r.worst_log_difference
             );
         }
-    }
-}
-
-/// One enum over the adaptations, so one kernel type covers all variants in a loop.
-#[derive(Clone, Debug)]
-enum AnyAdaptation {
-    Plain(Plain),
-    Online(Online),
-    Full(FullOnline),
-    Cache(CacheDriven),
-    Hybrid(Hybrid),
-}
-
-macro_rules! each {
-    ($self:expr, $a:ident => $e:expr) => {
-        match $self {
-            AnyAdaptation::Plain($a) => $e,
-            AnyAdaptation::Online($a) => $e,
-            AnyAdaptation::Full($a) => $e,
-            AnyAdaptation::Cache($a) => $e,
-            AnyAdaptation::Hybrid($a) => $e,
-        }
-    };
-}
-
-impl Adaptation for AnyAdaptation {
-    fn name(&self) -> &'static str {
-        each!(self, a => a.name())
-    }
-    fn needs_gradient(&self, dim: usize) -> bool {
-        each!(self, a => a.needs_gradient(dim))
-    }
-    fn gaussian(
-        &mut self,
-        p: &LangevinParams,
-        u: &[f64],
-        g: &[f64],
-        out: &mut ProposalGaussian,
-    ) -> bool {
-        each!(self, a => a.gaussian(p, u, g, out))
-    }
-    fn adapt(&mut self, p: &LangevinParams, u: &[f64], g: &[f64], first: bool) {
-        each!(self, a => a.adapt(p, u, g, first))
-    }
-    fn freeze(&mut self) {
-        each!(self, a => a.freeze())
-    }
-    fn is_frozen(&self) -> bool {
-        each!(self, a => a.is_frozen())
     }
 }
 

@@ -41,6 +41,13 @@ const MALA_SALT: u64 = 0x4d41_4c41_5053_5321;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PssCoordinates;
 
+/// Writes the interleaved indices of the coordinates [`PssCoordinates`] moves at `x` (the
+/// read prefixes of its last evaluation), in the order of its coordinates and gradients.
+pub fn moved_indices(x: &PssState, out: &mut Vec<usize>) {
+    out.clear();
+    for_each_moved(x, |i| out.push(i));
+}
+
 /// Calls `f` with every moved coordinate index of `x`, in order.
 fn for_each_moved(x: &PssState, mut f: impl FnMut(usize)) {
     let counts = x.read_counts();

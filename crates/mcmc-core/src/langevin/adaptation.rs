@@ -623,3 +623,61 @@ impl<A: Adaptation> Adaptation for PerDimension<A> {
         }
     }
 }
+
+/// Any of the adaptations, chosen at run time (a command-line `--integrator mala-online`, a
+/// table of variants in a test): one type for kernels that must hold any of them.
+#[derive(Clone, Debug)]
+pub enum AnyAdaptation {
+    /// [`Plain`].
+    Plain(Plain),
+    /// [`Online`].
+    Online(Online),
+    /// [`FullOnline`].
+    Full(FullOnline),
+    /// [`CacheDriven`].
+    Cache(CacheDriven),
+    /// [`Hybrid`].
+    Hybrid(Hybrid),
+}
+
+macro_rules! each_adaptation {
+    ($self:expr, $a:ident => $e:expr) => {
+        match $self {
+            AnyAdaptation::Plain($a) => $e,
+            AnyAdaptation::Online($a) => $e,
+            AnyAdaptation::Full($a) => $e,
+            AnyAdaptation::Cache($a) => $e,
+            AnyAdaptation::Hybrid($a) => $e,
+        }
+    };
+}
+
+impl Adaptation for AnyAdaptation {
+    fn name(&self) -> &'static str {
+        each_adaptation!(self, a => a.name())
+    }
+    fn needs_gradient(&self, dim: usize) -> bool {
+        each_adaptation!(self, a => a.needs_gradient(dim))
+    }
+    fn gaussian(
+        &mut self,
+        params: &LangevinParams,
+        u: &[f64],
+        g: &[f64],
+        out: &mut ProposalGaussian,
+    ) -> bool {
+        each_adaptation!(self, a => a.gaussian(params, u, g, out))
+    }
+    fn adapt(&mut self, params: &LangevinParams, u: &[f64], g: &[f64], first_visit: bool) {
+        each_adaptation!(self, a => a.adapt(params, u, g, first_visit))
+    }
+    fn freeze(&mut self) {
+        each_adaptation!(self, a => a.freeze())
+    }
+    fn is_frozen(&self) -> bool {
+        each_adaptation!(self, a => a.is_frozen())
+    }
+    fn for_each_cache(&mut self, f: &mut dyn FnMut(&mut CacheView)) {
+        each_adaptation!(self, a => a.for_each_cache(f))
+    }
+}

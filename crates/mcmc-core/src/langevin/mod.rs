@@ -39,7 +39,9 @@ mod params;
 mod sharing;
 mod space;
 
-pub use adaptation::{Adaptation, CacheDriven, FullOnline, Hybrid, Online, PerDimension, Plain};
+pub use adaptation::{
+    Adaptation, AnyAdaptation, CacheDriven, FullOnline, Hybrid, Online, PerDimension, Plain,
+};
 pub use cache::{GradientCache, Neighbour, Neighbours};
 pub use cache_view::{CacheView, PooledCache};
 pub use cheap_then_expensive::CheapThenExpensive;

@@ -2,10 +2,11 @@
 //! (PSSMLT over BDPT, MMLT) run through mcmc-core's generic render loop.
 
 pub mod dr;
+pub mod mala;
 mod path_sampler;
 mod run;
 mod stage_map;
 
 pub use path_sampler::{MmltTarget, PathPayload, PssmltTarget, PATH_STREAMS};
-pub use run::{render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings};
+pub use run::{render_mlt, render_mlt_per_chain, LargeStepMode, MltBudget, MltOutput, MltSettings};
 pub use stage_map::StagedSplats;

@@ -128,6 +128,14 @@ impl<'s> MmltTarget<'s> {
     }
 }
 
+impl MmltTarget<'_> {
+    /// The path depth this target samples.
+    #[must_use]
+    pub fn depth(&self) -> u32 {
+        self.depth
+    }
+}
+
 impl Target for MmltTarget<'_> {
     type State = PssState;
     type Payload = PathPayload;

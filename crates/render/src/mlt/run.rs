@@ -7,9 +7,11 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use mcmc_core::controller::{AutoLargeStep, LargeStepEstimate, LargeStepStats, LargeStepTunable};
-use mcmc_core::render_loop::{LoopBudget, LoopOutput, LoopSettings, RenderLoop, SplatPayload};
+use mcmc_core::render_loop::{
+    ChainSlot, LoopBudget, LoopOutput, LoopSettings, RenderLoop, SharedController, SplatPayload,
+};
 use mcmc_core::stats::AcceptanceStats;
-use mcmc_core::{Kernel, NoAdaptation, Progress, Target};
+use mcmc_core::{Controller, Kernel, NoAdaptation, Progress, Target};
 use pss::{FreshPss, PssState};
 
 use super::StagedSplats;
@@ -180,6 +182,65 @@ where
             })
         }
     }
+}
+
+/// As [`render_mlt`] with a kernel and a controller made per chain (from its
+/// [`ChainSlot`]: chain index and target index, e.g. the MMLT depth) and a fixed large-step
+/// probability: for integrators whose kernel depends on the chain's target (Langevin MLT:
+/// MALA on shallow depths, Kelemen on deep ones) or whose controllers share statistics
+/// through the loop's round hook (a gradient cache). `make_kernel` receives the large-step
+/// probability of `settings.large_step` (its `initial` value for automatic control, which
+/// this function does not run: a note says so).
+pub fn render_mlt_per_chain<T, K, C>(
+    targets: &[T],
+    make_kernel: impl Fn(ChainSlot, f64) -> K + Sync,
+    make_controller: impl Fn(ChainSlot) -> C + Sync,
+    settings: &MltSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> MltOutput
+where
+    T: Target<State = PssState>,
+    T::Payload: SplatPayload,
+    K: Kernel<T> + Send,
+    C: Controller<K, PssState> + SharedController<K> + Send,
+{
+    let pixels = (settings.width * settings.height) as f64;
+    let loop_settings = LoopSettings {
+        chains: settings.chains.max(1),
+        bootstrap_samples: settings.bootstrap_samples.max(1) as u64,
+        budget: match settings.budget {
+            MltBudget::MutationsPerPixel(m) => {
+                LoopBudget::Mutations((m * pixels).round().max(1.0) as u64)
+            }
+            MltBudget::Time(t) => LoopBudget::Time(t),
+        },
+        seed: settings.seed,
+        ..LoopSettings::default()
+    };
+    let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
+        .unwrap_or_else(|_| unreachable!("clamped to 1..=4"));
+    let (w, h) = (settings.width, settings.height);
+    let stage_map = settings.stage_map;
+    let (p, auto) = match settings.large_step {
+        LargeStepMode::Fixed(p) => (p, false),
+        LargeStepMode::Auto { initial, .. } => (initial, true),
+    };
+    let out = RenderLoop {
+        targets,
+        states: &states,
+        kernel: |slot: ChainSlot| make_kernel(slot, p),
+        controller: &make_controller,
+        sink: || StagedSplats::new(w, h, stage_map),
+    }
+    .run(&loop_settings, progress, cancel);
+    let mut result = finish(out, settings, p, |_| None);
+    if auto {
+        result.notes.push(format!(
+            "automatic large-step control is not run with this integrator: fixed p_large = {p}"
+        ));
+    }
+    result
 }
 
 /// Turns the loop's output into an [`MltOutput`].
