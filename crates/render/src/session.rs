@@ -215,6 +215,9 @@ pub fn render(
         IntegratorKind::Pt | IntegratorKind::Qmc => {
             Ok(pool.install(|| render_pt(scene, settings, start, progress, cancel)))
         }
+        IntegratorKind::Lqmc => Ok(pool.install(|| {
+            crate::integrator::lqmc::render_session(scene, settings, start, progress, cancel)
+        })),
         IntegratorKind::Bdpt
         | IntegratorKind::Pssmlt
         | IntegratorKind::Mmlt

@@ -3,9 +3,11 @@
 //! table of integrators ([`INTEGRATORS`]).
 
 pub mod halton_sampler;
+pub mod lqmc;
 pub mod pt;
 pub mod pt_driver;
 pub mod qmc;
+pub mod vertex_path;
 mod table;
 
 pub use table::{IntegratorInfo, IntegratorKind, INTEGRATORS};

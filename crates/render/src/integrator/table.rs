@@ -22,6 +22,9 @@ pub enum IntegratorKind {
     /// Halton QMC path tracing: the "Halton points" baseline of Tessari et al.
     /// ([`crate::integrator::qmc`]).
     Qmc,
+    /// Local quasi-Monte Carlo exploration of Halton seed paths (Tessari et al.;
+    /// [`crate::integrator::lqmc`]).
+    Lqmc,
 }
 
 /// One row of the integrator table.
@@ -76,6 +79,12 @@ pub const INTEGRATORS: &[IntegratorInfo] = &[
         description: "path tracing driven by per-pixel Owen-scrambled Halton points (the Halton QMC baseline of Tessari et al.)",
         is_mcmc: false,
         kind: IntegratorKind::Qmc,
+    },
+    IntegratorInfo {
+        name: "lqmc",
+        description: "local quasi-Monte Carlo (Tessari et al.): Halton seed paths explored by rank-1 lattices, prefixes re-traced and reconnected to the static suffix",
+        is_mcmc: false,
+        kind: IntegratorKind::Lqmc,
     },
 ];
 
@@ -137,12 +146,14 @@ mod tests {
         }
         // Every variant has a row; the match has no wildcard arm, so a new variant does not
         // compile here until it is added to `all` (and then needs its row).
-        use IntegratorKind::{Bdpt, Drmlt, Mmlt, Pssmlt, Pt, Qmc};
-        let all = [Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc];
+        use IntegratorKind::{Bdpt, Drmlt, Lqmc, Mmlt, Pssmlt, Pt, Qmc};
+        let all = [Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc, Lqmc];
         assert_eq!(all.len(), INTEGRATORS.len());
         for kind in all {
             match kind {
-                Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc => assert_eq!(kind.info().kind, kind),
+                Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc | Lqmc => {
+                    assert_eq!(kind.info().kind, kind)
+                }
             }
         }
         assert_eq!(INTEGRATORS[0].kind, IntegratorKind::default());
