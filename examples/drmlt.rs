@@ -366,6 +366,9 @@ where
             )
             .stats
         }
+        // Not among this example's configurations (it needs differentiable MMLT targets:
+        // examples/langevin.rs measures it).
+        DrVariant::CheapThenExpensive => AcceptanceStats::default(),
     }
 }
 

@@ -174,7 +174,21 @@ pub(crate) fn dr_variant(text: &str) -> Result<render::mlt::dr::DrVariant, Strin
         .iter()
         .find(|(name, _)| name.eq_ignore_ascii_case(text.trim()))
         .map(|&(_, v)| v)
-        .ok_or_else(|| format!("expected tierney-mira, green-mira or orbital, got '{text}'"))
+        .ok_or_else(|| {
+            format!(
+                "expected tierney-mira, green-mira, orbital or cheap-then-expensive, got '{text}'"
+            )
+        })
+}
+
+/// Parses `--mala-preset`.
+pub(crate) fn mala_preset(text: &str) -> Result<mcmc_core::langevin::LangevinParams, String> {
+    use mcmc_core::langevin::LangevinParams;
+    match text.trim().to_ascii_lowercase().as_str() {
+        "paper" => Ok(LangevinParams::luan2020()),
+        "code" => Ok(LangevinParams::luan2020_code()),
+        _ => Err(format!("expected paper or code, got '{text}'")),
+    }
 }
 
 /// Parses `--dr-on`.

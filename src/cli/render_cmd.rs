@@ -99,13 +99,24 @@ pub(crate) struct RenderArgs {
     /// Exposure of the PNG preview in stops, -64..=64 (the EXR is never scaled).
     #[arg(long, allow_negative_numbers = true, value_name = "STOPS", default_value = "0", value_parser = parse::stops)]
     exposure: f32,
-    /// drmlt: the second-stage rule, `tierney-mira`, `green-mira` or `orbital` (the paper's
-    /// recommendation).
+    /// drmlt: the second-stage rule, `tierney-mira`, `green-mira`, `orbital` (the paper's
+    /// recommendation) or `cheap-then-expensive` (Gaussian first stage, MALA second stage,
+    /// Green-Mira; on MMLT).
     #[arg(long, value_name = "RULE", default_value = "orbital", value_parser = parse::dr_variant)]
     dr_variant: DrVariant,
     /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).
     #[arg(long, value_name = "pssmlt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
     dr_on: DrBase,
+    /// mala*: parameter preset, `paper` (Luan et al. 2020, section 7: epsilon 0.01, K 30,
+    /// H 10000) or `code` (the authors' code: epsilon 0.005, K 5, H 3000, preconditioner
+    /// clamped to [0.01, 100], shrink prior 0.005).
+    #[arg(long, value_name = "paper|code", default_value = "paper", value_parser = parse::mala_preset)]
+    mala_preset: mcmc_core::langevin::LangevinParams,
+    /// mala*: chains of MMLT depth up to D run MALA, deeper ones the Kelemen small step,
+    /// 0..=1024.
+    #[arg(long, allow_negative_numbers = true, value_name = "D", default_value_t = 3,
+          value_parser = clap::value_parser!(u32).range(0..=1024))]
+    mala_max_depth: u32,
     /// Environment light: `none`, a radiance `R,G,B` or grey `V` (each in 0..=1e6), or an
     /// equirectangular map (.exr, .hdr, .pfm; +Y up, image centre towards -Z) [default: the
     /// scene's lights; a scene without any light gets a uniform environment of radiance 1].
@@ -226,6 +237,11 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             small_step: args.small_step,
             dr_variant: args.dr_variant,
             dr_on: args.dr_on,
+            mala: render::mlt::mala::MalaConfig {
+                params: args.mala_preset,
+                max_depth: args.mala_max_depth,
+                ..render::mlt::mala::MalaConfig::default()
+            },
         },
         strategy_images: args.strategy_images,
     }

@@ -18,6 +18,7 @@ use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 
 use crate::mlt::dr::{self, DrBase, DrVariant};
+use crate::mlt::mala::{self, MalaConfig};
 
 /// Which integrator renders the image: defined with the integrator table.
 pub use crate::integrator::IntegratorKind;
@@ -39,6 +40,9 @@ pub struct McmcSettings {
     pub dr_variant: DrVariant,
     /// Delayed-rejection MLT: the path sampler (default PSSMLT).
     pub dr_on: DrBase,
+    /// Langevin MLT (`mala*`, and `drmlt` with `cheap-then-expensive`): parameters, the
+    /// depth rule, the finite-difference step (the variant comes from the integrator).
+    pub mala: MalaConfig,
 }
 
 impl Default for McmcSettings {
@@ -50,6 +54,7 @@ impl Default for McmcSettings {
             small_step: SmallMutation::Kelemen(KelemenParams::kelemen2002()),
             dr_variant: DrVariant::Orbital,
             dr_on: DrBase::Pssmlt,
+            mala: MalaConfig::default(),
         }
     }
 }
@@ -221,7 +226,11 @@ pub fn render(
         IntegratorKind::Bdpt
         | IntegratorKind::Pssmlt
         | IntegratorKind::Mmlt
-        | IntegratorKind::Drmlt => {
+        | IntegratorKind::Drmlt
+        | IntegratorKind::Mala
+        | IntegratorKind::MalaOnline
+        | IntegratorKind::MalaCache
+        | IntegratorKind::MalaHybrid => {
             // BDPT and the MCMC targets use the scene's camera: set it to the image size.
             let mut sized;
             let scene = if (scene.camera().width(), scene.camera().height())
@@ -362,7 +371,39 @@ fn render_bidirectional(
                 .unwrap_or_else(|_| unreachable!("clamped")),
         )
     };
-    let out = if settings.integrator == IntegratorKind::Drmlt {
+    let out = if let Some(variant) = settings.integrator.mala_variant() {
+        let config = MalaConfig { variant, ..m.mala };
+        notes.push(mala_note(&config));
+        mala::render(
+            scene,
+            params,
+            &config,
+            false,
+            &mlt_settings,
+            m.small_step,
+            progress,
+            cancel,
+        )
+    } else if settings.integrator == IntegratorKind::Drmlt
+        && m.dr_variant == DrVariant::CheapThenExpensive
+    {
+        notes.push(format!(
+            "delayed rejection: cheap-then-expensive (Gaussian sigma {} then MALA, Green-Mira) on MMLT{}; {}",
+            m.mala.cheap_sigma,
+            if m.dr_on == DrBase::Pssmlt { " (it needs one strategy per sample: --dr-on pssmlt is ignored)" } else { "" },
+            mala_note(&m.mala)
+        ));
+        mala::render(
+            scene,
+            params,
+            &m.mala,
+            true,
+            &mlt_settings,
+            m.small_step,
+            progress,
+            cancel,
+        )
+    } else if settings.integrator == IntegratorKind::Drmlt {
         let layout = dr::dr_layout(settings.max_depth);
         let base = m.dr_on;
         notes.push(format!(
@@ -458,6 +499,18 @@ pub fn render_cornell_box(size: u32, spp: u32, seed: u64) -> Result<Image, Rende
     Ok(render(&scene, &settings, &NoProgress, &AtomicBool::new(false))?.image)
 }
 
+/// One line on the Langevin settings for the render notes.
+fn mala_note(config: &MalaConfig) -> String {
+    format!(
+        "Langevin MLT: {} (epsilon {}, truncation {}), MALA on MMLT depths <= {} and Kelemen beyond; gradients by central finite differences (h = {:e})",
+        config.variant.name(),
+        config.params.epsilon,
+        config.params.max_gradient,
+        config.max_depth,
+        config.fd_step
+    )
+}
+
 /// Delayed-rejection MLT over `targets` with the kernel of `variant` (`mlt::dr`).
 fn render_dr<T>(
     targets: &[T],
@@ -494,6 +547,9 @@ where
             progress,
             cancel,
         ),
+        DrVariant::CheapThenExpensive => {
+            unreachable!("cheap-then-expensive is dispatched to render_langevin")
+        }
     }
 }
 

@@ -64,6 +64,26 @@ fn same_seed_any_thread_count_is_bit_identical() {
     }
 }
 
+/// The delayed-rejection variant that is not a row of the table: cheap then expensive
+/// (Gaussian, then MALA with a finite-difference gradient).
+#[test]
+fn drmlt_cheap_then_expensive_is_bit_identical() {
+    let scene = Scene::cornell_box(24, 16);
+    let with = |threads| {
+        let mut s = settings(24, 16, threads, 11);
+        s.integrator = IntegratorKind::Drmlt;
+        s.mcmc.dr_variant = render::mlt::dr::DrVariant::CheapThenExpensive;
+        s.mcmc.dr_on = render::mlt::dr::DrBase::Mmlt;
+        s
+    };
+    let reference = run(&scene, &with(1));
+    assert!(reference.mean_luminance() > 0.0);
+    assert!(bits(&run(&scene, &with(2))) == bits(&reference));
+    let mut other = with(1);
+    other.seed = 12;
+    assert!(bits(&run(&scene, &other)) != bits(&reference));
+}
+
 #[test]
 fn different_seed_gives_a_different_image() {
     let scene = Scene::cornell_box(16, 16);

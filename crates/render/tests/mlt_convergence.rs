@@ -46,6 +46,7 @@ use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
 use render::metrics::{relmse, RELMSE_EPSILON};
 use render::mlt::dr::{self, DrBase, DrVariant};
+use render::mlt::mala::{self, MalaConfig, MalaVariant};
 use render::mlt::{
     render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget, PssmltTarget,
     PATH_STREAMS,
@@ -63,10 +64,12 @@ const K: usize = 16;
 const BLOCKS: usize = 4;
 /// Max depth of the enclosure renders.
 const ENCLOSURE_DEPTH: u32 = 3;
-/// Null-hypothesis comparisons in this file: the enclosure's image mean (PSSMLT, MMLT) and
-/// MMLT's per-depth bootstrap means (depths `0..=ENCLOSURE_DEPTH`); the Cornell box's image
-/// mean and blocks (PSSMLT, MMLT).
-const N_COMPARISONS: usize = 2 + (ENCLOSURE_DEPTH as usize + 1) + 2 * (1 + BLOCKS * BLOCKS);
+/// Null-hypothesis comparisons in this file: the enclosure's image mean (PSSMLT, MMLT, the
+/// four DR configurations, the four MALA variants and cheap-then-expensive) and MMLT's
+/// per-depth bootstrap means (depths `0..=ENCLOSURE_DEPTH`); the Cornell box's image mean and
+/// blocks (PSSMLT, MMLT, four DR configurations, four MALA variants, cheap-then-expensive).
+const N_COMPARISONS: usize =
+    (2 + 4 + 5) + (ENCLOSURE_DEPTH as usize + 1) + 11 * (1 + BLOCKS * BLOCKS);
 
 // ---------------------------------------------------------------------------------------------
 // Student's t.
@@ -162,6 +165,10 @@ enum Method {
     Dr(DrVariant),
     /// Delayed-rejection MLT over MMLT, orbital second stage on the camera subpath.
     DrMmlt,
+    /// Langevin MLT (`render::mlt::mala`) with the given adaptation.
+    Mala(MalaVariant),
+    /// Delayed rejection, cheap (Gaussian) then expensive (MALA), on MMLT.
+    CheapThenExpensive,
 }
 
 fn kernel(p: f64) -> Mh<PssmltProposal> {
@@ -227,8 +234,32 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
                     &NoProgress,
                     &cancel,
                 ),
+                DrVariant::CheapThenExpensive => unreachable!("Method::CheapThenExpensive"),
             }
         }
+        Method::Mala(variant) => mala::render(
+            scene,
+            params,
+            &MalaConfig {
+                variant,
+                ..MalaConfig::default()
+            },
+            false,
+            settings,
+            SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap(),
+            &NoProgress,
+            &cancel,
+        ),
+        Method::CheapThenExpensive => mala::render(
+            scene,
+            params,
+            &MalaConfig::default(),
+            true,
+            settings,
+            SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap(),
+            &NoProgress,
+            &cancel,
+        ),
         Method::DrMmlt => {
             let layout = dr::dr_layout(params.max_depth);
             render_mlt(
@@ -581,6 +612,36 @@ fn drmlt_tierney_mira_and_green_mira_converge_to_bdpt_on_the_cornell_box() {
 #[test]
 fn drmlt_on_mmlt_converges_to_bdpt_on_the_cornell_box() {
     cornell_case(Method::DrMmlt, 8000, MMLT_MPP);
+}
+
+/// Langevin MLT: MALA on depths <= 3 of the depth-5 box, Kelemen beyond. It gets MMLT's
+/// mutation budget: its gradients cost more per mutation, but each mutation is one strategy.
+const MALA_MPP: f64 = MMLT_MPP;
+
+#[test]
+fn mala_variants_match_the_analytic_enclosure() {
+    enclosure_case(Method::Mala(MalaVariant::Plain), 9000);
+    enclosure_case(Method::Mala(MalaVariant::Online), 9100);
+    enclosure_case(Method::Mala(MalaVariant::Cache), 9200);
+    enclosure_case(Method::Mala(MalaVariant::Hybrid), 9300);
+    enclosure_case(Method::CheapThenExpensive, 9400);
+}
+
+#[test]
+fn mala_and_mala_online_converge_to_bdpt_on_the_cornell_box() {
+    cornell_case(Method::Mala(MalaVariant::Plain), 9500, MALA_MPP);
+    cornell_case(Method::Mala(MalaVariant::Online), 9600, MALA_MPP);
+}
+
+#[test]
+fn mala_cache_and_hybrid_converge_to_bdpt_on_the_cornell_box() {
+    cornell_case(Method::Mala(MalaVariant::Cache), 9700, MALA_MPP);
+    cornell_case(Method::Mala(MalaVariant::Hybrid), 9800, MALA_MPP);
+}
+
+#[test]
+fn drmlt_cheap_then_expensive_converges_to_bdpt_on_the_cornell_box() {
+    cornell_case(Method::CheapThenExpensive, 9900, MALA_MPP);
 }
 
 // ---------------------------------------------------------------------------------------------

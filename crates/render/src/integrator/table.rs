@@ -25,6 +25,14 @@ pub enum IntegratorKind {
     /// Local quasi-Monte Carlo exploration of Halton seed paths (Tessari et al.;
     /// [`crate::integrator::lqmc`]).
     Lqmc,
+    /// Langevin MLT (Luan et al. 2020) over MMLT, plain MALA ([`crate::mlt::mala`]).
+    Mala,
+    /// Langevin MLT with online adaptation.
+    MalaOnline,
+    /// Langevin MLT with cache-driven adaptation.
+    MalaCache,
+    /// Langevin MLT with hybrid adaptation.
+    MalaHybrid,
 }
 
 /// One row of the integrator table.
@@ -86,9 +94,46 @@ pub const INTEGRATORS: &[IntegratorInfo] = &[
         is_mcmc: false,
         kind: IntegratorKind::Lqmc,
     },
+    IntegratorInfo {
+        name: "mala",
+        description: "Langevin MLT (Luan et al. 2020) over MMLT: plain MALA on shallow depths, Kelemen beyond",
+        is_mcmc: true,
+        kind: IntegratorKind::Mala,
+    },
+    IntegratorInfo {
+        name: "mala-online",
+        description: "Langevin MLT: MALA with online (Adam-like, diminishing) adaptation",
+        is_mcmc: true,
+        kind: IntegratorKind::MalaOnline,
+    },
+    IntegratorInfo {
+        name: "mala-cache",
+        description: "Langevin MLT: MALA with cache-driven adaptation (gradient cache shared by all chains)",
+        is_mcmc: true,
+        kind: IntegratorKind::MalaCache,
+    },
+    IntegratorInfo {
+        name: "mala-hybrid",
+        description: "Langevin MLT: MALA with hybrid adaptation (online until the cache is full, then cache-driven)",
+        is_mcmc: true,
+        kind: IntegratorKind::MalaHybrid,
+    },
 ];
 
 impl IntegratorKind {
+    /// The Langevin MLT variant of the `mala*` integrators (`None` for the others).
+    #[must_use]
+    pub const fn mala_variant(self) -> Option<crate::mlt::mala::MalaVariant> {
+        use crate::mlt::mala::MalaVariant;
+        match self {
+            IntegratorKind::Mala => Some(MalaVariant::Plain),
+            IntegratorKind::MalaOnline => Some(MalaVariant::Online),
+            IntegratorKind::MalaCache => Some(MalaVariant::Cache),
+            IntegratorKind::MalaHybrid => Some(MalaVariant::Hybrid),
+            _ => None,
+        }
+    }
+
     /// This integrator's row of [`INTEGRATORS`].
     ///
     /// # Panics
@@ -146,12 +191,17 @@ mod tests {
         }
         // Every variant has a row; the match has no wildcard arm, so a new variant does not
         // compile here until it is added to `all` (and then needs its row).
-        use IntegratorKind::{Bdpt, Drmlt, Lqmc, Mmlt, Pssmlt, Pt, Qmc};
-        let all = [Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc, Lqmc];
+        use IntegratorKind::{
+            Bdpt, Drmlt, Lqmc, Mala, MalaCache, MalaHybrid, MalaOnline, Mmlt, Pssmlt, Pt, Qmc,
+        };
+        let all = [
+            Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc, Lqmc, Mala, MalaOnline, MalaCache, MalaHybrid,
+        ];
         assert_eq!(all.len(), INTEGRATORS.len());
         for kind in all {
             match kind {
-                Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc | Lqmc => {
+                Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc | Lqmc | Mala | MalaOnline | MalaCache
+                | MalaHybrid => {
                     assert_eq!(kind.info().kind, kind)
                 }
             }

@@ -42,14 +42,19 @@ pub enum DrVariant {
     /// The pairwise orbital rule (eq. 11) — the paper's recommended variant.
     #[default]
     Orbital,
+    /// Cheap then expensive (section 5.2, with MALA in place of H2MC): an isotropic Gaussian
+    /// first stage and a MALA second stage under Green and Mira's rule, on MMLT
+    /// ([`crate::mlt::mala::cheap_then_expensive_kernel`]).
+    CheapThenExpensive,
 }
 
 impl DrVariant {
     /// The variants with their CLI names.
-    pub const ALL: [(&'static str, DrVariant); 3] = [
+    pub const ALL: [(&'static str, DrVariant); 4] = [
         ("tierney-mira", DrVariant::TierneyMira),
         ("green-mira", DrVariant::GreenMira),
         ("orbital", DrVariant::Orbital),
+        ("cheap-then-expensive", DrVariant::CheapThenExpensive),
     ];
 
     /// The CLI name.

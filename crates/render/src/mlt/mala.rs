@@ -31,8 +31,8 @@ use std::cell::RefCell;
 
 use mcmc_core::controller::LargeStepTunable;
 use mcmc_core::langevin::{
-    Adaptation, AnyAdaptation, CacheDriven, CacheView, CheapThenExpensive, HasGradientCache,
-    Hybrid, Langevin, LangevinParams, Online, PerDimension, Plain,
+    Adaptation, AnyAdaptation, CacheDriven, CacheSharing, CacheView, CheapThenExpensive,
+    HasGradientCache, Hybrid, Langevin, LangevinParams, Online, PerDimension, Plain,
 };
 use mcmc_core::{DifferentiableTarget, Kernel, Mh, Observer, SampleOf, StepInfo, Target};
 use pss::langevin::{moved_indices, PssCoordinates};
@@ -42,7 +42,7 @@ use rand::Rng;
 use super::{MmltTarget, PathPayload};
 
 /// The MALA variant of `--integrator mala*`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum MalaVariant {
     /// Plain MALA (eq. 7): no adaptation.
     Plain,
@@ -364,4 +364,42 @@ impl HasGradientCache for MalaChainKernel {
             MalaChainKernel::Kelemen(_) => {}
         }
     }
+}
+
+/// Renders Langevin MLT over the differentiable MMLT targets of `scene` (depths
+/// `0..=params.max_depth`): per chain [`mala_kernel`] (or, with `cheap_then_expensive`,
+/// [`cheap_then_expensive_kernel`]) for the chain's depth, gradient caches shared through the
+/// render loop's round hook ([`CacheSharing`]), so the image is identical for any thread count
+/// under a mutation budget. The large-step probability is `settings.large_step`'s (fixed).
+#[allow(clippy::too_many_arguments)]
+pub fn render(
+    scene: &crate::scene::Scene,
+    params: crate::bdpt::BdptParams,
+    config: &MalaConfig,
+    cheap_then_expensive: bool,
+    settings: &super::MltSettings,
+    small: SmallMutation,
+    progress: &dyn mcmc_core::Progress,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> super::MltOutput {
+    let (w, h) = (settings.width as u32, settings.height as u32);
+    let targets: Vec<_> = MmltTarget::all_depths(scene, params, w, h)
+        .into_iter()
+        .map(|t| DifferentiableMmlt::new(t, config.fd_step))
+        .collect();
+    super::render_mlt_per_chain(
+        &targets,
+        |slot, p| {
+            let depth = targets[slot.target].depth();
+            if cheap_then_expensive {
+                cheap_then_expensive_kernel(config, depth, small, p)
+            } else {
+                mala_kernel(config, depth, small, p)
+            }
+        },
+        |_| CacheSharing,
+        settings,
+        progress,
+        cancel,
+    )
 }
