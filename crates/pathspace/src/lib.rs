@@ -44,6 +44,7 @@
 //! ```
 
 pub mod analytic;
+mod bidirectional;
 mod combine;
 mod error;
 mod independence;
@@ -54,6 +55,7 @@ mod scene;
 mod target;
 mod vec3;
 
+pub use bidirectional::{BidirectionalMutation, BidirectionalParams};
 pub use combine::{ra_mixture, PathMutation, PerturbOrGlobal};
 pub use error::PathspaceError;
 pub use independence::IndependenceMutation;

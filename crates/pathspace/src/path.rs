@@ -41,6 +41,9 @@ impl Vertex {
 /// sampling, mutation transition densities) is with respect to this `mu`: "area measure" with
 /// the specular deltas cancelled consistently.
 ///
+/// The camera vertex has `material == u32::MAX` and is never passed to a scene's BSDF or
+/// emitter methods.
+///
 /// # Invariants
 /// Paths built by this crate's samplers and mutations are *valid*: every edge is unoccluded,
 /// every specular vertex's successor is the first hit along its specular direction, `x_1` is

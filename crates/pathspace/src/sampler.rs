@@ -72,7 +72,8 @@ impl UnidirectionalParams {
 /// solid angle at `x_{j-1}` to area at `x_j` and `q_i` is `p_bsdf(w_i) J_{i+1}` at a
 /// non-specular vertex or the lobe probability at a specular one;
 /// `p_connect(x) = p_cam(w_1) J_2 prod_{i=2}^{k-2} q_i  p_light(x_k)` (zero if `x_{k-1}` is
-/// specular). Both are densities with respect to [`Path`]'s measure.
+/// specular, or if BSDF sampling at `x_{k-1}` could not produce the connection: zero pdf or
+/// zero cosine at `x_k`; such connections fail). Both are densities with respect to [`Path`]'s measure.
 #[derive(Debug)]
 pub struct UnidirectionalSampler<'a, S: ?Sized> {
     scene: &'a S,
@@ -111,49 +112,99 @@ impl<'a, S: PathScene + ?Sized> UnidirectionalSampler<'a, S> {
         }
     }
 
-    /// Extends the walk at vertex `i` (`i >= 1`) by BSDF sampling; returns false on failure.
-    fn scatter<R: Rng + ?Sized>(&self, rng: &mut R, path: &mut Path, i: usize) -> bool {
-        let v = path.vertices[i];
+    /// Log density of the walk prefix: camera ray and the scattering at vertices
+    /// `1..last`, producing vertices `1..=last`.
+    fn log_walk_density(&self, path: &Path, last: usize) -> f64 {
+        (0..last)
+            .map(|i| log_scatter_density(self.scene, &path.vertices, i))
+            .sum()
+    }
+}
+
+/// `ln` of the density with which a camera random walk at vertex `i` produces `v[i + 1]`
+/// (w.r.t. [`Path`]'s measure): the camera's direction pdf times `J` at `i = 0`; at a
+/// specular vertex the probability of its lobe; else the BSDF pdf (given the direction to
+/// `v[i - 1]`) times `J = |cos θ_{i+1}| / r^2`.
+pub(crate) fn log_scatter_density<S: PathScene + ?Sized>(scene: &S, v: &[Vertex], i: usize) -> f64 {
+    let p = &v[i].point;
+    let q = if i == 0 {
+        scene.direction_pdf(direction(p.position, v[1].position()))
+            * solid_angle_to_area(p.position, &v[1].point)
+    } else {
+        let wo = direction(p.position, v[i - 1].position());
+        match v[i].specular {
+            Some(lobe) => scene.specular_pdf(p, wo, lobe),
+            None => {
+                let wi = direction(p.position, v[i + 1].position());
+                scene.pdf(p, wo, wi) * solid_angle_to_area(p.position, &v[i + 1].point)
+            }
+        }
+    };
+    q.ln()
+}
+
+/// Extends a camera random walk at vertex `i` (the camera if `i == 0`): samples a direction
+/// (setting the vertex's specular flag to the chosen lobe) and pushes the hit. Returns false
+/// on failure (absorbed, missed the scene, outside the image).
+pub(crate) fn extend_walk<S: PathScene + ?Sized, R: Rng + ?Sized>(
+    scene: &S,
+    rng: &mut R,
+    path: &mut Path,
+    i: usize,
+) -> bool {
+    let v = path.vertices[i];
+    let dir = if i == 0 {
+        scene.direction([rng.random(), rng.random()])
+    } else {
         let wo = direction(v.position(), path.vertices[i - 1].position());
         let u = [rng.random(), rng.random(), rng.random()];
-        let Some(s) = self.scene.sample(&v.point, wo, u) else {
+        let Some(s) = scene.sample(&v.point, wo, u) else {
             return false;
         };
         if s.pdf.is_nan() || s.pdf <= 0.0 {
             return false;
         }
         path.vertices[i].specular = s.lobe;
-        let Some(hit) = self.scene.intersect(v.position(), s.wi) else {
-            return false;
-        };
-        path.vertices.push(Vertex {
-            point: hit,
-            specular: None,
-        });
-        true
-    }
+        s.wi
+    };
+    let Some(hit) = scene.intersect(v.position(), dir) else {
+        return false;
+    };
+    path.vertices.push(Vertex {
+        point: hit,
+        specular: None,
+    });
+    true
+}
 
-    /// Log density of the walk prefix: camera ray and the scattering at vertices
-    /// `1..last`, producing vertices `1..=last`.
-    fn log_walk_density(&self, path: &Path, last: usize) -> f64 {
-        let v = &path.vertices;
-        let s = self.scene;
-        let w1 = path.primary_direction();
-        let mut log_p =
-            (s.direction_pdf(w1) * solid_angle_to_area(v[0].position(), &v[1].point)).ln();
-        for i in 1..last {
-            let p = &v[i].point;
-            let wo = direction(p.position, v[i - 1].position());
-            let q = match v[i].specular {
-                Some(lobe) => s.specular_pdf(p, wo, lobe),
-                None => {
-                    let wi = direction(p.position, v[i + 1].position());
-                    s.pdf(p, wo, wi) * solid_angle_to_area(p.position, &v[i + 1].point)
-                }
-            };
-            log_p += q.ln();
-        }
-        log_p
+/// True if a camera walk could have produced the last vertex from the one before it (nonzero
+/// BSDF pdf and area Jacobian). The connect technique fails otherwise (e.g. a connection from
+/// a black emitter, or within one plane), so that its support lies in the hit technique's and
+/// every path it draws can also be reached by walks (what the mutations regenerate with).
+fn connection_walkable<S: PathScene + ?Sized>(scene: &S, v: &[Vertex]) -> bool {
+    let k = v.len();
+    let (a, b) = (&v[k - 2].point, &v[k - 1].point);
+    let j = solid_angle_to_area(a.position, b);
+    let pdf = if k == 2 {
+        scene.direction_pdf(direction(a.position, b.position))
+    } else {
+        let wo = direction(a.position, v[k - 3].position());
+        scene.pdf(a, wo, direction(a.position, b.position))
+    };
+    j > 0.0 && pdf > 0.0
+}
+
+/// The camera vertex of a scene (normal along the view axis).
+pub(crate) fn camera_vertex<S: PathScene + ?Sized>(scene: &S) -> Vertex {
+    let forward = scene.direction([0.5, 0.5]);
+    Vertex {
+        point: SurfacePoint {
+            position: scene.origin(),
+            shading_normal: forward,
+            geometric_normal: forward,
+            material: u32::MAX,
+        },
+        specular: None,
     }
 }
 
@@ -163,28 +214,10 @@ impl<S: PathScene + ?Sized> IndependentSampler for UnidirectionalSampler<'_, S> 
         path.vertices.clear();
         let n = rng.random_range(1..=self.params.max_segments);
         let connect = rng.random::<f64>() < self.connect_probability(n);
-        let origin = scene.origin();
-        let cam = SurfacePoint {
-            position: origin,
-            shading_normal: scene.direction([0.5, 0.5]),
-            geometric_normal: scene.direction([0.5, 0.5]),
-            material: u32::MAX,
-        };
-        path.vertices.push(Vertex {
-            point: cam,
-            specular: None,
-        });
-        let raster = [rng.random(), rng.random()];
-        let Some(hit) = scene.intersect(origin, scene.direction(raster)) else {
-            return false;
-        };
-        path.vertices.push(Vertex {
-            point: hit,
-            specular: None,
-        });
+        path.vertices.push(camera_vertex(scene));
         let walk_edges = if connect { n - 1 } else { n };
-        for i in 1..walk_edges {
-            if !self.scatter(rng, path, i) {
+        for i in 0..walk_edges {
+            if !extend_walk(scene, rng, path, i) {
                 return false;
             }
         }
@@ -204,6 +237,9 @@ impl<S: PathScene + ?Sized> IndependentSampler for UnidirectionalSampler<'_, S> 
                 point: light,
                 specular: None,
             });
+            if !connection_walkable(scene, &path.vertices) {
+                return false;
+            }
         }
         let end = path.vertices[n].point;
         scene.is_emitter(&end) && path.raster(scene).is_some()
@@ -223,7 +259,7 @@ impl<S: PathScene + ?Sized> IndependentSampler for UnidirectionalSampler<'_, S> 
         } else {
             f64::NEG_INFINITY
         };
-        let connect = if c > 0.0 && !v[k - 2].is_specular() {
+        let connect = if c > 0.0 && !v[k - 2].is_specular() && connection_walkable(self.scene, v) {
             c.ln()
                 + self.log_walk_density(path, k - 2)
                 + self.scene.emitter_pdf(&v[k - 1].point).ln()

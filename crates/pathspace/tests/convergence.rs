@@ -16,8 +16,9 @@ use mcmc_core::testing::MhWithoutHastings;
 use mcmc_core::{Chain, Kernel, Mh, NoAdaptation, Proposal, Proposed};
 use pathspace::analytic::AnalyticScene;
 use pathspace::{
-    ra_mixture, FixedScale, IndependenceMutation, IndependentSampler, Path, PathTarget,
-    Perturbation, PerturbationKind, ScaleSource, UnidirectionalParams, UnidirectionalSampler,
+    ra_mixture, BidirectionalMutation, BidirectionalParams, FixedScale, IndependenceMutation,
+    IndependentSampler, Path, PathTarget, Perturbation, PerturbationKind, ScaleSource,
+    UnidirectionalParams, UnidirectionalSampler,
 };
 use rand::{Rng, RngExt};
 
@@ -143,6 +144,30 @@ fn multi_chain_mixture_with_jumping_sigma_converges() {
     assert!(z.iter().all(|z| z.abs() < 4.0), "z scores {z:?}");
 }
 
+/// The bidirectional mutation (subpath delete / eye-side regenerate) as the global move,
+/// alone and mixed with the lens perturbation.
+#[test]
+fn bidirectional_converges() {
+    let scene = leak(furnace());
+    let bidir = BidirectionalMutation::new(
+        scene,
+        BidirectionalParams {
+            max_segments: SEGMENTS,
+        },
+    )
+    .unwrap();
+    let z = z_scores(&run(scene, Mh::new(bidir), 5));
+    assert!(z.iter().all(|z| z.abs() < 4.0), "alone: z scores {z:?}");
+    let m = ra_mixture(
+        PerturbationKind::Lens,
+        Perturbation::lens(scene, jumping_sigma),
+        bidir,
+    )
+    .unwrap();
+    let z = z_scores(&run(scene, Mh::new(m), 6));
+    assert!(z.iter().all(|z| z.abs() < 4.0), "with lens: z scores {z:?}");
+}
+
 #[test]
 fn negative_control_without_hastings_fails() {
     let scene = leak(furnace());
@@ -201,11 +226,49 @@ fn negative_control_current_sigma_reverse_fails() {
 #[test]
 fn test_box_multi_chain_matches_importance_sampling() {
     let scene = leak(AnalyticScene::test_box().unwrap());
+    let sampler = box_sampler(scene);
+    let kernel = Mh::new(
+        ra_mixture(
+            PerturbationKind::MultiChain,
+            Perturbation::multi_chain(scene, jumping_sigma),
+            IndependenceMutation::new(sampler),
+        )
+        .unwrap(),
+    );
+    test_box_against_reference(scene, kernel, 5000);
+}
+
+/// As above with the bidirectional mutation as the global move (it regenerates subpaths
+/// through specular vertices, where regenerated vertices may coincide with old ones).
+#[test]
+fn test_box_bidirectional_matches_importance_sampling() {
+    let scene = leak(AnalyticScene::test_box().unwrap());
+    let bidir = BidirectionalMutation::new(scene, BidirectionalParams { max_segments: 4 }).unwrap();
+    let kernel = Mh::new(
+        ra_mixture(
+            PerturbationKind::MultiChain,
+            Perturbation::multi_chain(scene, jumping_sigma),
+            bidir,
+        )
+        .unwrap(),
+    );
+    test_box_against_reference(scene, kernel, 6000);
+}
+
+fn box_sampler(scene: &'static AnalyticScene) -> UnidirectionalSampler<'static, AnalyticScene> {
     let params = UnidirectionalParams {
         max_segments: 4,
         connect_probability: 0.5,
     };
-    let sampler = UnidirectionalSampler::new(scene, params).unwrap();
+    UnidirectionalSampler::new(scene, params).unwrap()
+}
+
+fn test_box_against_reference<K: Kernel<PathTarget<'static, AnalyticScene>> + Clone>(
+    scene: &'static AnalyticScene,
+    kernel: K,
+    seed: u64,
+) {
+    let sampler = box_sampler(scene);
     let stats = |p: &Path, raster: [f64; 2]| -> [f64; 3] {
         [
             f64::from(u8::from(p.vertices.iter().any(|v| v.is_specular()))),
@@ -237,17 +300,9 @@ fn test_box_multi_chain_matches_importance_sampling() {
         .collect();
     let w_total: f64 = batches.iter().map(|b| b.0).sum();
     let target = PathTarget::new(scene);
-    let kernel = Mh::new(
-        ra_mixture(
-            PerturbationKind::MultiChain,
-            Perturbation::multi_chain(scene, jumping_sigma),
-            IndependenceMutation::new(sampler),
-        )
-        .unwrap(),
-    );
     let per_chain: Vec<[f64; 3]> = (0..BOX_CHAINS)
         .map(|c| {
-            let mut rng = common::rng(5000 + c);
+            let mut rng = common::rng(seed * 1000 + c);
             // Start: resample 256 independent paths in proportion to f/p.
             let cands: Vec<(Path, f64)> = (0..256)
                 .map(|_| {

@@ -16,8 +16,9 @@ use mcmc_core::{Proposal, Proposed};
 use pathspace::analytic::{AnalyticScene, Material, PinholeCamera};
 use pathspace::perturb::DirectionKernel;
 use pathspace::{
-    eye_subpath_end, FixedScale, IndependentSampler, Path, Perturbation, PerturbationKind, Rgb,
-    TruncatedNormalDirection, UnidirectionalParams, UnidirectionalSampler, Vec3,
+    eye_subpath_end, BidirectionalMutation, BidirectionalParams, FixedScale, IndependentSampler,
+    Path, Perturbation, PerturbationKind, Rgb, TruncatedNormalDirection, UnidirectionalParams,
+    UnidirectionalSampler, Vec3,
 };
 use rand::Rng;
 
@@ -42,12 +43,26 @@ fn reach_mass<P: Proposal<Path>, Smp: IndependentSampler>(
     n: usize,
     seed: u64,
 ) -> (f64, f64) {
+    reach_mass_where(pert, sampler, x, n, seed, |_| true)
+}
+
+/// As [`reach_mass`], counting only candidates with `keep(y)`.
+fn reach_mass_where<P: Proposal<Path>, Smp: IndependentSampler>(
+    pert: &P,
+    sampler: &Smp,
+    x: &Path,
+    n: usize,
+    seed: u64,
+    keep: impl Fn(&Path) -> bool,
+) -> (f64, f64) {
     let mut rng = common::rng(seed);
     let mut y = Path::new();
     let values: Vec<f64> = (0..n)
         .map(|_| match pert.propose(x, &mut y, &mut rng) {
-            Proposed::Move { .. } => (sampler.log_density(&y) - pert.log_q(x, &y)).exp(),
-            Proposed::Invalid { .. } => 0.0,
+            Proposed::Move { .. } if keep(&y) => {
+                (sampler.log_density(&y) - pert.log_q(x, &y)).exp()
+            }
+            _ => 0.0,
         })
         .collect();
     common::mean_and_se(&values)
@@ -85,6 +100,65 @@ fn lens_density_in_the_furnace_box() {
         (mb - truth).abs() > 10.0 * seb.max(se),
         "the density without sin θ passed: {mb} +- {seb} vs {truth}"
     );
+}
+
+/// The bidirectional mutation can regenerate the whole path (deletion `(0, k)`), so
+/// `E_{y ~ T(.|x)}[p(y) 1{y shares no vertex with x} / T(x -> y)]` is the probability that the sampler
+/// succeeds, for any `x`. (Candidates that keep vertices of `x` live on a null set of the path
+/// measure: they are excluded from the identity; the convergence tests cover them.)
+#[test]
+fn bidirectional_density_integrates_the_sampler_density() {
+    let scene = mirror_room();
+    let n_max = 4;
+    let sampler = UnidirectionalSampler::new(
+        &scene,
+        UnidirectionalParams {
+            max_segments: n_max,
+            connect_probability: 0.5,
+        },
+    )
+    .unwrap();
+    let mutation = BidirectionalMutation::new(
+        &scene,
+        BidirectionalParams {
+            max_segments: n_max,
+        },
+    )
+    .unwrap();
+    let mut rng = common::rng(20);
+    let draws = 400_000;
+    let mut p = Path::new();
+    let success = (0..draws)
+        .filter(|_| sampler.sample(&mut rng, &mut p))
+        .count() as f64
+        / draws as f64;
+    let success_se = (success * (1.0 - success) / draws as f64).sqrt();
+    // The camera does not see the ceiling emitter: paths have 2 to 4 edges.
+    // Longer paths are fully regenerated less often (p_d(0, k) = 2^{-k} / D_k): more draws.
+    for (seed, edges, n) in [
+        (0u64, 2usize, 1_500_000),
+        (1, 3, 3_000_000),
+        (2, 4, 5_000_000),
+    ] {
+        let x = loop {
+            let p = common::draw(&sampler, &mut rng);
+            if p.segments() == edges {
+                break p;
+            }
+        };
+        // Regenerated from the camera to the light: new x_2 and new light vertex.
+        let fresh = |y: &Path| {
+            y.vertices[1].position() != x.vertices[1].position()
+                && y.vertices.last().unwrap().position() != x.vertices.last().unwrap().position()
+        };
+        let (m, se) = reach_mass_where(&mutation, &sampler, &x, n, 21 + seed, fresh);
+        let tol = 4.5 * (se * se + success_se * success_se).sqrt();
+        assert!(
+            (m - success).abs() < tol && tol < 0.15 * success,
+            "x with {} edges: E[p/T] = {m} +- {se}, sampler success {success} +- {success_se}",
+            x.segments()
+        );
+    }
 }
 
 /// A box whose floor is a mirror, whose whole ceiling emits, with diffuse side walls and a

@@ -12,8 +12,9 @@ use mcmc_core::testing::{assert_hastings_consistent, assert_path_balance, Pairwi
 use mcmc_core::{Mh, Partition, Proposal, Proposed};
 use pathspace::analytic::AnalyticScene;
 use pathspace::{
-    eye_subpath_end, ra_mixture, FixedScale, IndependenceMutation, Path, PathTarget, Perturbation,
-    PerturbationKind, ScaleSource, UnidirectionalParams, UnidirectionalSampler,
+    eye_subpath_end, ra_mixture, BidirectionalMutation, BidirectionalParams, FixedScale,
+    IndependenceMutation, Path, PathTarget, Perturbation, PerturbationKind, ScaleSource,
+    UnidirectionalParams, UnidirectionalSampler,
 };
 use proptest::prelude::*;
 use rand::Rng;
@@ -144,6 +145,51 @@ fn ra_mixture_multi_chain() {
     )
     .unwrap();
     check("RA mixture (multi-chain)", m, 7);
+}
+
+fn bidirectional(scene: &AnalyticScene) -> BidirectionalMutation<'_, AnalyticScene> {
+    BidirectionalMutation::new(scene, BidirectionalParams { max_segments: 6 }).unwrap()
+}
+
+#[test]
+fn bidirectional_mutation() {
+    let scene = scene();
+    check("bidirectional", bidirectional(&scene), 12);
+}
+
+#[test]
+fn ra_mixture_multi_chain_bidirectional() {
+    let scene = scene();
+    let m = ra_mixture(
+        PerturbationKind::MultiChain,
+        Perturbation::multi_chain(&scene, varying_sigma),
+        bidirectional(&scene),
+    )
+    .unwrap();
+    check("RA mixture (multi-chain + bidirectional)", m, 13);
+}
+
+/// The bidirectional mutation proposes valid paths, and often reuses part of the path.
+#[test]
+fn bidirectional_candidates_are_valid() {
+    let scene = scene();
+    let sampler = sampler(&scene);
+    let mutation = bidirectional(&scene);
+    let mut rng = common::rng(14);
+    let (mut valid, mut partial) = (0, 0);
+    let mut y = Path::new();
+    for _ in 0..5000 {
+        let x = common::draw(&sampler, &mut rng);
+        if let Proposed::Move { .. } = mutation.propose(&x, &mut y, &mut rng) {
+            y.check_valid(&scene, 1e-9).unwrap();
+            valid += 1;
+            partial += usize::from(y.vertices[1].position() == x.vertices[1].position());
+        }
+    }
+    assert!(
+        valid > 1000 && partial > 300,
+        "{valid} valid, {partial} keep x_2"
+    );
 }
 
 /// Two regions split by the primary ray's x, with different scales: the hook the next

@@ -77,7 +77,10 @@ pub fn eye_subpath_end(kind: PerturbationKind, path: &Path) -> Option<usize> {
 /// `T(y | x) = prod_c p_ω(angle(w_c(x), w_c(y)); sigma_c(x)) |cos θ_{y_{c+1}}| / |y_{c+1} - y_c|^2`
 ///
 /// where `sigma(x)` comes from the [`ScaleSource`] *at the state perturbed from*: the
-/// reverse density `T(x | y)` uses `sigma(y)` (section 5.2, eq. 2-3).
+/// reverse density `T(x | y)` uses `sigma(y)` (section 5.2, eq. 2-3). Pairs where a perturbed
+/// direction is exactly unchanged get density 0 (a null event for the perturbation, whose
+/// solid-angle density is singular at `θ = 0`; other mutations of a mixture produce such
+/// pairs with positive probability).
 #[derive(Debug)]
 pub struct Perturbation<'a, S: ?Sized, Sc = FixedScale, K = TruncatedNormalDirection> {
     scene: &'a S,
@@ -235,7 +238,14 @@ impl<'a, S: PathScene + ?Sized, Sc: ScaleSource, K: DirectionKernel> Perturbatio
             let sigma = if c == 0 { sigmas[0] } else { sigmas[1] };
             let w_from = direction(f[c].position(), f[c + 1].position());
             let w_to = direction(t[c].position(), t[c + 1].position());
-            log_q += self.kernel.log_density(angle_between(w_from, w_to), sigma)
+            let theta = angle_between(w_from, w_to);
+            if theta == 0.0 {
+                // An unchanged direction: a null event for the kernel (whose solid-angle
+                // density is singular at 0), but a positive-probability one for mutations that
+                // keep vertices (the bidirectional mutation). The density is 0 there.
+                return f64::NEG_INFINITY;
+            }
+            log_q += self.kernel.log_density(theta, sigma)
                 + solid_angle_to_area(t[c].position(), &t[c + 1].point).ln();
         }
         log_q
