@@ -58,6 +58,31 @@ impl Default for BidirectionalParams {
 /// a lobe probability), w.r.t. [`Path`]'s measure; kept vertices are common to `x` and `y`
 /// (reversible jump with unit Jacobian, Veach 1997).
 ///
+/// # Example
+/// ```
+/// use mcmc_core::{Proposal, Proposed};
+/// use pathspace::analytic::AnalyticScene;
+/// use pathspace::{
+///     BidirectionalMutation, BidirectionalParams, IndependentSampler, Path,
+///     UnidirectionalParams, UnidirectionalSampler,
+/// };
+/// use rand::SeedableRng;
+///
+/// let scene = AnalyticScene::test_box().unwrap();
+/// let sampler = UnidirectionalSampler::new(&scene, UnidirectionalParams::default()).unwrap();
+/// let bidir = BidirectionalMutation::new(&scene, BidirectionalParams::default()).unwrap();
+/// let mut rng = rand_pcg::Pcg64::seed_from_u64(2);
+/// let mut x = Path::new();
+/// while !sampler.sample(&mut rng, &mut x) {}
+/// let mut y = Path::new();
+/// for _ in 0..20 {
+///     if let Proposed::Move { .. } = bidir.propose(&x, &mut y, &mut rng) {
+///         assert!(y.check_valid(&scene, 1e-9).is_ok());
+///         assert!(bidir.log_q(&x, &y).is_finite());
+///     }
+/// }
+/// ```
+///
 /// Not implemented: light-side generation (it would need emitter direction sampling, and the
 /// Jacobian between the two measures at specular vertices generated from the light side).
 #[derive(Debug)]

@@ -75,6 +75,25 @@ impl Selection<Path> for PerturbOrGlobal {
 /// The mixture of section 8.1: `perturbation` with probability 0.5 where it applies,
 /// `global` otherwise (component 0 = perturbation, 1 = global).
 ///
+/// # Example
+/// ```
+/// use mcmc_core::Proposal;
+/// use pathspace::analytic::AnalyticScene;
+/// use pathspace::{
+///     ra_mixture, BidirectionalMutation, BidirectionalParams, FixedScale, Perturbation,
+///     PerturbationKind,
+/// };
+///
+/// let scene = AnalyticScene::test_box().unwrap();
+/// let mutation = ra_mixture(
+///     PerturbationKind::Lens,
+///     Perturbation::lens(&scene, FixedScale::otsu2018()),
+///     BidirectionalMutation::new(&scene, BidirectionalParams::default()).unwrap(),
+/// )
+/// .unwrap();
+/// assert_eq!(mutation.num_components(), 2);
+/// ```
+///
 /// # Errors
 /// Never for these two components (kept as `Result` because [`Mixture::new`] validates).
 pub fn ra_mixture<P, G>(

@@ -14,6 +14,25 @@ use crate::sampler::IndependentSampler;
 /// This is the global, ergodic move of path-space MLT (the role of Veach and Guibas'
 /// bidirectional mutation, regional-adaptive paper, section 3.3): every path the sampler can
 /// produce is reachable in one step. A failed sample is [`Proposed::Invalid`].
+///
+/// # Example
+/// ```
+/// use mcmc_core::Proposal;
+/// use pathspace::analytic::AnalyticScene;
+/// use pathspace::{
+///     IndependenceMutation, IndependentSampler, Path, UnidirectionalParams, UnidirectionalSampler,
+/// };
+/// use rand::SeedableRng;
+///
+/// let scene = AnalyticScene::furnace_box(0.5, 1.0).unwrap();
+/// let sampler = UnidirectionalSampler::new(&scene, UnidirectionalParams::default()).unwrap();
+/// let mutation = IndependenceMutation::new(sampler);
+/// let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+/// let (mut x, mut y) = (Path::new(), Path::new());
+/// while !sampler.sample(&mut rng, &mut x) {}
+/// while !sampler.sample(&mut rng, &mut y) {}
+/// assert_eq!(mutation.log_q(&x, &y), sampler.log_density(&y));
+/// ```
 #[derive(Clone, Copy, Debug)]
 pub struct IndependenceMutation<Smp> {
     /// The path sampler.

@@ -44,6 +44,23 @@ impl Vertex {
 /// The camera vertex has `material == u32::MAX` and is never passed to a scene's BSDF or
 /// emitter methods.
 ///
+/// # Example
+/// ```
+/// use pathspace::analytic::AnalyticScene;
+/// use pathspace::{IndependentSampler, Path, UnidirectionalParams, UnidirectionalSampler};
+/// use rand::SeedableRng;
+///
+/// let scene = AnalyticScene::test_box().unwrap();
+/// let sampler = UnidirectionalSampler::new(&scene, UnidirectionalParams::default()).unwrap();
+/// let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+/// let mut path = Path::new();
+/// while !sampler.sample(&mut rng, &mut path) {}
+/// assert!(path.check_valid(&scene, 1e-9).is_ok());
+/// // f(x) / p(x): one-sample estimate of the image's mean radiance.
+/// let weight = path.contribution(&scene).luminance() / sampler.log_density(&path).exp();
+/// assert!(weight.is_finite() && weight >= 0.0);
+/// ```
+///
 /// # Invariants
 /// Paths built by this crate's samplers and mutations are *valid*: every edge is unoccluded,
 /// every specular vertex's successor is the first hit along its specular direction, `x_1` is

@@ -73,7 +73,30 @@ impl UnidirectionalParams {
 /// non-specular vertex or the lobe probability at a specular one;
 /// `p_connect(x) = p_cam(w_1) J_2 prod_{i=2}^{k-2} q_i  p_light(x_k)` (zero if `x_{k-1}` is
 /// specular, or if BSDF sampling at `x_{k-1}` could not produce the connection: zero pdf or
-/// zero cosine at `x_k`; such connections fail). Both are densities with respect to [`Path`]'s measure.
+/// zero cosine at `x_k`; such connections fail). Both are densities with respect to
+/// [`Path`]'s measure.
+///
+/// # Example
+/// ```
+/// use pathspace::analytic::AnalyticScene;
+/// use pathspace::{IndependentSampler, Path, UnidirectionalParams, UnidirectionalSampler};
+/// use rand::SeedableRng;
+///
+/// // In the furnace box every path of n <= 3 edges carries L_e rho^(n-1): E[f/p] = 1.75.
+/// let scene = AnalyticScene::furnace_box(0.5, 1.0).unwrap();
+/// let params = UnidirectionalParams { max_segments: 3, connect_probability: 0.5 };
+/// let sampler = UnidirectionalSampler::new(&scene, params).unwrap();
+/// let mut rng = rand_pcg::Pcg64::seed_from_u64(1);
+/// let mut path = Path::new();
+/// let n = 20_000;
+/// let mut sum = 0.0;
+/// for _ in 0..n {
+///     if sampler.sample(&mut rng, &mut path) {
+///         sum += path.contribution(&scene).luminance() / sampler.log_density(&path).exp();
+///     }
+/// }
+/// assert!((sum / n as f64 - 1.75).abs() < 0.05);
+/// ```
 #[derive(Debug)]
 pub struct UnidirectionalSampler<'a, S: ?Sized> {
     scene: &'a S,

@@ -19,6 +19,23 @@ pub struct PathContribution {
 /// contribution `pi(x) = l(f(x))` with `l` the Rec. 709 luminance, with respect to [`Path`]'s
 /// measure. The payload carries the raster position and the RGB `f(x)`; an MLT estimate of a
 /// pixel is `b / N sum_i h_j(x_i) f(x_i) / pi(x_i)` with `b = int pi dmu`.
+///
+/// # Example
+/// ```
+/// use mcmc_core::Sample;
+/// use pathspace::analytic::AnalyticScene;
+/// use pathspace::{IndependentSampler, Path, PathTarget, UnidirectionalParams, UnidirectionalSampler};
+/// use rand::SeedableRng;
+///
+/// let scene = AnalyticScene::furnace_box(0.5, 2.0).unwrap();
+/// let sampler = UnidirectionalSampler::new(&scene, UnidirectionalParams::default()).unwrap();
+/// let mut rng = rand_pcg::Pcg64::seed_from_u64(4);
+/// let mut x = Path::new();
+/// while !sampler.sample(&mut rng, &mut x) {}
+/// let sample = Sample::evaluate(&PathTarget::new(&scene), x);
+/// assert!(sample.log_density.is_finite());
+/// assert!((0.0..1.0).contains(&sample.payload.raster[0]));
+/// ```
 #[derive(Debug)]
 pub struct PathTarget<'a, S: ?Sized> {
     scene: &'a S,

@@ -35,6 +35,21 @@ pub trait DirectionKernel {
 ///
 /// (the `sin θ` Jacobian is what a density "in θ" forgets; the reference-notes pitfall 5).
 /// It is symmetric in old and new direction at equal `sigma`.
+///
+/// # Example
+/// ```
+/// use pathspace::perturb::{angle_between, rotate_direction, DirectionKernel};
+/// use pathspace::{TruncatedNormalDirection, Vec3};
+/// use rand::SeedableRng;
+///
+/// let mut rng = rand_pcg::Pcg64::seed_from_u64(1);
+/// let w = Vec3::new(0.0, 0.0, 1.0);
+/// let (theta, phi) = TruncatedNormalDirection.sample_angles(0.1, &mut rng);
+/// let v = rotate_direction(w, theta, phi);
+/// assert!((angle_between(w, v) - theta).abs() < 1e-12);
+/// // Solid-angle density, including 1 / (2 pi sin theta).
+/// assert!(TruncatedNormalDirection.log_density(theta, 0.1).is_finite());
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TruncatedNormalDirection;
 

@@ -81,6 +81,30 @@ pub fn eye_subpath_end(kind: PerturbationKind, path: &Path) -> Option<usize> {
 /// direction is exactly unchanged get density 0 (a null event for the perturbation, whose
 /// solid-angle density is singular at `θ = 0`; other mutations of a mixture produce such
 /// pairs with positive probability).
+///
+/// # Example
+/// ```
+/// use mcmc_core::{Proposal, Proposed};
+/// use pathspace::analytic::AnalyticScene;
+/// use pathspace::{IndependentSampler, Path, Perturbation, UnidirectionalParams, UnidirectionalSampler};
+/// use rand::SeedableRng;
+///
+/// let scene = AnalyticScene::test_box().unwrap();
+/// let sampler = UnidirectionalSampler::new(&scene, UnidirectionalParams::default()).unwrap();
+/// let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+/// let mut x = Path::new();
+/// while !sampler.sample(&mut rng, &mut x) {}
+/// // A scale that depends on the state: larger on the right half of the image.
+/// let sigma = |p: &Path| if p.primary_direction().x > 0.0 { [0.1, 0.1] } else { [0.02, 0.02] };
+/// let lens = Perturbation::multi_chain(&scene, sigma);
+/// let mut y = Path::new();
+/// if let Proposed::Move { log_hastings, .. } = lens.propose(&x, &mut y, &mut rng) {
+///     // The reverse density uses the scale at y.
+///     let expected = lens.log_q(&y, &x) - lens.log_q(&x, &y);
+///     assert!((log_hastings - expected).abs() < 1e-12);
+///     assert!(x.same_structure(&y));
+/// }
+/// ```
 #[derive(Debug)]
 pub struct Perturbation<'a, S: ?Sized, Sc = FixedScale, K = TruncatedNormalDirection> {
     scene: &'a S,
