@@ -1,7 +1,6 @@
 //! A bidirectional-style mutation: delete a subpath and regenerate it from the eye side
 //! (Veach and Guibas 1997, section 5.2, restricted to eye-side generation).
 
-use mcmc_core::proposal::log_sum_exp;
 use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
@@ -221,7 +220,8 @@ impl<'a, S: PathScene + ?Sized> BidirectionalMutation<'a, S> {
             return f64::NEG_INFINITY;
         }
         let log_dk = deletion_normaliser(kx).ln();
-        let mut terms = Vec::new();
+        // Running log-sum-exp of the terms (no allocation).
+        let (mut max, mut sum) = (f64::NEG_INFINITY, 0.0f64);
         for l in 0..kx.min(ky) {
             // Kept prefix x_0 .. x_l: positions equal, flags equal before l.
             if x[l].position() != y[l].position()
@@ -266,10 +266,20 @@ impl<'a, S: PathScene + ?Sized> BidirectionalMutation<'a, S> {
                 let walk: f64 = (l..l + a)
                     .map(|i| log_scatter_density(self.scene, y, i))
                     .sum();
-                terms.push(-((m - l) as f64) * std::f64::consts::LN_2 - log_dk + log_add + walk);
+                let term = -((m - l) as f64) * std::f64::consts::LN_2 - log_dk + log_add + walk;
+                if term > max {
+                    sum = sum * (max - term).exp() + 1.0;
+                    max = term;
+                } else if term > f64::NEG_INFINITY {
+                    sum += (term - max).exp();
+                }
             }
         }
-        log_sum_exp(&terms)
+        if max == f64::NEG_INFINITY || max.is_nan() {
+            max
+        } else {
+            max + sum.ln()
+        }
     }
 }
 
