@@ -10,9 +10,12 @@
 //!   renderer implements; [`analytic::AnalyticScene`] implements them in f64 for tests.
 //! - [`PathTarget`]: the MLT target `pi = luminance(f)` for mcmc-core's kernels.
 //! - Mutations, each an mcmc-core [`mcmc_core::Proposal`] with its exact transition density:
-//!   [`IndependenceMutation`] (regenerate the path), [`Perturbation`] (lens and multi-chain,
+//!   [`IndependenceMutation`] (regenerate the path), [`BidirectionalMutation`] (delete a
+//!   subpath and regenerate it from the eye side), [`Perturbation`] (lens and multi-chain,
 //!   with a state-dependent angular scale from a [`ScaleSource`]), and their combination
 //!   [`ra_mixture`] (section 8.1).
+//!
+//! The method page is `docs/methods/pathspace-mlt.md`.
 //!
 //! # Example
 //! Path-space MLT on the white furnace box, with the lens perturbation and the independence
