@@ -84,7 +84,7 @@ pub const INTEGRATORS: &[IntegratorInfo] = &[
     },
     IntegratorInfo {
         name: "qmc",
-        description: "path tracing driven by per-pixel Owen-scrambled Halton points (the Halton QMC baseline of Tessari et al.)",
+        description: "path tracing driven by per-pixel Cranley-Patterson-rotated Halton points (the Halton QMC baseline of Tessari et al.)",
         is_mcmc: false,
         kind: IntegratorKind::Qmc,
     },
