@@ -123,17 +123,9 @@ fn parse_options() -> Options {
     o
 }
 
-/// Median, min and max of `v` (NaN-free input).
+/// Median, min and max of `v` (`render::metrics::median_min_max`; NaN for no values).
 fn summary(v: &[f64]) -> (f64, f64, f64) {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    let median = if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    };
-    (median, s[0], s[n - 1])
+    render::metrics::median_min_max(v).unwrap_or((f64::NAN, f64::NAN, f64::NAN))
 }
 
 /// One compared configuration.

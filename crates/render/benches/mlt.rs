@@ -1,6 +1,7 @@
 //! Throughput of the bidirectional integrators on `scenes/cornell-glass.gltf` (64x64, max
 //! depth 5, one thread): BDPT samples/s, PSSMLT and MMLT mutations/s, and the cost of the MCMC
-//! bookkeeping alone (MH on a PSS target that reads 20 numbers and traces nothing).
+//! bookkeeping alone (MH on a PSS target that reads 20 numbers and traces nothing); Langevin
+//! MLT's mutations/s and the cost of a finite-difference value + gradient against a value.
 //!
 //! `cargo bench -p render --bench mlt` (add `-- --quick` for a short run).
 
@@ -10,10 +11,12 @@ use std::path::Path;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec2;
 use mcmc_core::render_loop::{SplatGrid, SplatObserver};
+use mcmc_core::DifferentiableTarget;
 use mcmc_core::{Chain, Mh, NoAdaptation, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::SeedableRng;
 use render::bdpt::{self, BdptParams, BdptScratch};
+use render::mlt::mala::{self, DifferentiableMmlt, MalaConfig, MalaVariant};
 use render::mlt::{MmltTarget, PssmltTarget, PATH_STREAMS};
 use render::sampler::{IndependentSampler, Sampler};
 use render::scene::Scene;
@@ -33,10 +36,11 @@ fn kernel() -> Mh<PssmltProposal> {
     Mh::new(PssmltProposal::new(small, 0.3).expect("valid p"))
 }
 
-/// Steps a chain started from a bootstrap sample of `target` chosen by luminance.
-fn bench_chain<T>(c: &mut Criterion, name: &str, target: &T)
+/// Steps a chain of `kernel` started from a bootstrap sample of `target` chosen by luminance.
+fn bench_chain<T, K>(c: &mut Criterion, name: &str, target: &T, kernel: K)
 where
     T: Target<State = PssState, Payload = render::mlt::PathPayload>,
+    K: mcmc_core::Kernel<T>,
 {
     // One of 2000 independent points chosen in proportion to f (the loop's resampling with
     // offset 0.5), so the benchmarked chain starts in the stationary distribution.
@@ -58,7 +62,7 @@ where
         .unwrap_or(0) as u64;
     let state = PssState::new(PATH_STREAMS, start);
     let rng = rand_pcg::Pcg64::seed_from_u64(3);
-    let Ok(mut chain) = Chain::new(target, kernel(), NoAdaptation, rng, state) else {
+    let Ok(mut chain) = Chain::new(target, kernel, NoAdaptation, rng, state) else {
         return;
     };
     let mut buffer = SplatGrid::new(SIZE as usize, SIZE as usize);
@@ -106,10 +110,56 @@ fn integrators(c: &mut Criterion) {
         c,
         "pssmlt_1_thread",
         &PssmltTarget::new(&scene, params, SIZE, SIZE),
+        kernel(),
     );
     // MMLT: the chain of depth 2 (most of the image's light in this scene is 1-2 bounces).
     let mmlt = MmltTarget::all_depths(&scene, params, SIZE, SIZE);
-    bench_chain(c, "mmlt_depth2_1_thread", &mmlt[2]);
+    bench_chain(c, "mmlt_depth2_1_thread", &mmlt[2], kernel());
+    // Langevin MLT on the same depth: plain and hybrid MALA (finite-difference gradients).
+    let config = MalaConfig::default();
+    let small = SmallMutation::Kelemen(KelemenParams::kelemen2002());
+    let diff = DifferentiableMmlt::new(mmlt[2], config.fd_step);
+    for variant in [MalaVariant::Plain, MalaVariant::Hybrid] {
+        let config = MalaConfig { variant, ..config };
+        bench_chain(
+            c,
+            &format!("{}_depth2_1_thread", variant.name()),
+            &diff,
+            mala::mala_kernel(&config, 2, small, 0.3),
+        );
+    }
+}
+
+/// The cost of one value + gradient of the depth-2 MMLT target against one value, at a state
+/// with light (finite differences: `2 d + 1` evaluations for `d` moved coordinates).
+fn gradient(c: &mut Criterion) {
+    let scene = scene();
+    let params = BdptParams::default();
+    for depth in [1u32, 2, 3] {
+        let target = DifferentiableMmlt::new(
+            MmltTarget::all_depths(&scene, params, SIZE, SIZE)[depth as usize],
+            1e-4,
+        );
+        let mut payload = render::mlt::PathPayload::default();
+        let Some(key) = (0..10_000u64).find(|&k| {
+            let mut x = PssState::new(PATH_STREAMS, k);
+            target.evaluate(&mut x, &mut payload).is_finite()
+        }) else {
+            continue;
+        };
+        let mut x = PssState::new(PATH_STREAMS, key);
+        target.evaluate(&mut x, &mut payload);
+        let dims: usize = x.read_counts().iter().sum();
+        let mut group = c.benchmark_group(format!("mmlt_depth{depth}_{dims}_dims"));
+        group.bench_function("value", |b| {
+            b.iter(|| black_box(target.evaluate(&mut x, &mut payload)))
+        });
+        let mut grad = Vec::new();
+        group.bench_function("value_and_gradient", |b| {
+            b.iter(|| black_box(target.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
+        });
+        group.finish();
+    }
 }
 
 /// A PSS target that reads 20 numbers and returns a smooth density: MCMC bookkeeping only.
@@ -144,5 +194,5 @@ fn bookkeeping(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, integrators, bookkeeping);
+criterion_group!(benches, integrators, gradient, bookkeeping);
 criterion_main!(benches);

@@ -1,0 +1,296 @@
+//! Langevin MCMC rendering (Luan et al. 2020): equal-time comparison on bundled scenes.
+//!
+//! Scenes (default caustic-pool, motion-blur, glossy-highlight): at `--size` x `--size`, each
+//! method gets `--time` seconds per render (bootstrap included) and runs with `--seeds` seeds;
+//! methods are interleaved seed by seed so that a change in machine load hits all of them
+//! alike. Methods (all with large steps of probability 0.3, maximum depth 5):
+//! - PSSMLT/K: PSSMLT with Kelemen's small step (s1 = 1/1024, s2 = 1/64);
+//! - MMLT/K: multiplexed MLT with Kelemen's small step (the base MALA runs on);
+//! - MALA, MALA-online, MALA-cache, MALA-hybrid: `--integrator mala*` (MALA on MMLT depths
+//!   <= 3, Kelemen beyond; the paper's parameters, `--mala-preset paper`);
+//! - DR cheap-then-expensive: `--integrator drmlt --dr-variant cheap-then-expensive`;
+//! - MALA-online and MALA-hybrid with the authors' code's values (`--mala-preset code`:
+//!   epsilon 0.005, K 5, H 3000, preconditioner clamped to [0.01, 100], shrink prior 0.005).
+//!
+//! Errors are MSE (the paper's metric) and relMSE against the scene's BDPT reference
+//! (`scenes/references/<scene>.exr`, box-downsampled to the render size), median over the
+//! seeds with the min-max range; also mutations per second and acceptance. Writes
+//! `results.md`, `results.csv` and the seed-0 images (EXR and PNG) of every method to `--out`
+//! (default `target/langevin`). docs/methods/mala.md reports a run.
+//!
+//! `cargo run --release --example langevin -- [--time 3] [--seeds 5] [--size 64] [--out DIR]
+//! [scene ...]`
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use render::image::Image;
+use render::metrics::median_min_max;
+use render::mlt::dr::{DrBase, DrVariant};
+use render::scene::Scene;
+use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+
+/// Command-line options.
+struct Options {
+    time: f64,
+    seeds: u64,
+    size: u32,
+    out: PathBuf,
+    scenes: Vec<String>,
+}
+
+fn usage(msg: &str) -> ! {
+    eprintln!(
+        "{msg}\nusage: langevin [--time SECONDS] [--seeds N] [--size PIXELS] [--out DIR] [scene ...]"
+    );
+    std::process::exit(2)
+}
+
+fn parse_options() -> Options {
+    let mut o = Options {
+        time: 3.0,
+        seeds: 5,
+        size: 64,
+        out: PathBuf::from("target/langevin"),
+        scenes: Vec::new(),
+    };
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        let mut value = |what: &str| {
+            args.next()
+                .unwrap_or_else(|| usage(&format!("{what} needs a value")))
+        };
+        match a.as_str() {
+            "--time" => {
+                o.time = value("--time")
+                    .parse()
+                    .ok()
+                    .filter(|t: &f64| *t > 0.0 && *t <= 3600.0)
+                    .unwrap_or_else(|| usage("--time needs seconds in (0, 3600]"))
+            }
+            "--seeds" => {
+                o.seeds = value("--seeds")
+                    .parse()
+                    .ok()
+                    .filter(|n| (1..=100).contains(n))
+                    .unwrap_or_else(|| usage("--seeds needs a number in 1..=100"))
+            }
+            "--size" => {
+                o.size = value("--size")
+                    .parse()
+                    .ok()
+                    .filter(|n| (8..=1024).contains(n))
+                    .unwrap_or_else(|| usage("--size needs a number in 8..=1024"))
+            }
+            "--out" => o.out = PathBuf::from(value("--out")),
+            s if s.starts_with('-') => usage(&format!("unknown option {s}")),
+            s => o.scenes.push(s.to_owned()),
+        }
+    }
+    if o.scenes.is_empty() {
+        o.scenes = ["caustic-pool", "motion-blur", "glossy-highlight"]
+            .map(String::from)
+            .to_vec();
+    }
+    o
+}
+
+/// The compared configurations: label, file stem, integrator, DR variant, the authors' code
+/// preset (`--mala-preset code`) instead of the paper's.
+const METHODS: [(&str, &str, IntegratorKind, Option<DrVariant>, bool); 9] = [
+    ("PSSMLT/K", "pssmlt-k", IntegratorKind::Pssmlt, None, false),
+    ("MMLT/K", "mmlt-k", IntegratorKind::Mmlt, None, false),
+    ("MALA", "mala", IntegratorKind::Mala, None, false),
+    (
+        "MALA-online",
+        "mala-online",
+        IntegratorKind::MalaOnline,
+        None,
+        false,
+    ),
+    (
+        "MALA-cache",
+        "mala-cache",
+        IntegratorKind::MalaCache,
+        None,
+        false,
+    ),
+    (
+        "MALA-hybrid",
+        "mala-hybrid",
+        IntegratorKind::MalaHybrid,
+        None,
+        false,
+    ),
+    (
+        "DR cheap-then-expensive",
+        "dr-cte",
+        IntegratorKind::Drmlt,
+        Some(DrVariant::CheapThenExpensive),
+        false,
+    ),
+    (
+        "MALA-online (code preset)",
+        "mala-online-code",
+        IntegratorKind::MalaOnline,
+        None,
+        true,
+    ),
+    (
+        "MALA-hybrid (code preset)",
+        "mala-hybrid-code",
+        IntegratorKind::MalaHybrid,
+        None,
+        true,
+    ),
+];
+
+fn settings(method: usize, size: u32, budget: Budget, seed: u64) -> RenderSettings {
+    let (_, _, integrator, dr, code_preset) = METHODS[method];
+    let mut mcmc = McmcSettings::default();
+    if code_preset {
+        mcmc.mala.params = mcmc_core::langevin::LangevinParams::luan2020_code();
+    }
+    if let Some(v) = dr {
+        mcmc.dr_variant = v;
+        mcmc.dr_on = DrBase::Mmlt;
+    }
+    RenderSettings {
+        width: size,
+        height: size,
+        integrator,
+        budget,
+        threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        seed,
+        max_depth: 5,
+        mcmc,
+        strategy_images: false,
+    }
+}
+
+/// One render's measurements.
+struct Run {
+    mse: f64,
+    relmse: f64,
+    mutations_per_second: f64,
+    acceptance: f64,
+}
+
+/// The overall acceptance rate from the render's notes ("acceptance rate X over N mutations").
+fn acceptance(notes: &[String]) -> f64 {
+    notes
+        .iter()
+        .find_map(|n| n.strip_prefix("acceptance rate "))
+        .and_then(|t| t.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(f64::NAN)
+}
+
+fn run_once(scene: &Scene, reference: &Image, s: &RenderSettings) -> (Run, Image) {
+    let out = render(scene, s, &NoProgress, &AtomicBool::new(false)).expect("render");
+    let run = Run {
+        mse: render::metrics::mse(&out.image, reference).unwrap_or(f64::NAN),
+        relmse: render::metrics::relmse(&out.image, reference).unwrap_or(f64::NAN),
+        mutations_per_second: out.samples as f64 / out.elapsed.as_secs_f64(),
+        acceptance: acceptance(&out.notes),
+    };
+    (run, out.image)
+}
+
+fn summary(v: &[f64]) -> (f64, f64, f64) {
+    median_min_max(v).unwrap_or((f64::NAN, f64::NAN, f64::NAN))
+}
+
+fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
+    let size = o.size;
+    let reference_path = Path::new("scenes/references").join(format!("{name}.exr"));
+    let Some(reference) = render::image_io::read_exr(&reference_path)
+        .ok()
+        .and_then(|r| r.box_downsample(size as usize, size as usize))
+    else {
+        eprintln!(
+            "{name}: no usable reference at {} (the size must divide the reference's); skipped",
+            reference_path.display()
+        );
+        return;
+    };
+    let scene = match Scene::load(&Path::new("scenes").join(format!("{name}.gltf"))) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{name}: {e}");
+            return;
+        }
+    };
+    let dir = o.out.join(name);
+    let _ = std::fs::create_dir_all(&dir);
+    let budget = Budget::Time(Duration::from_secs_f64(o.time));
+    let mut runs: Vec<Vec<Run>> = METHODS.iter().map(|_| Vec::new()).collect();
+    for seed in 0..o.seeds {
+        for (m, (label, stem, ..)) in METHODS.iter().enumerate() {
+            let (run, image) = run_once(&scene, &reference, &settings(m, size, budget, seed));
+            eprintln!(
+                "{name} seed {seed} {label}: MSE {:.3e}, relMSE {:.4}, {:.0} mut/s, acceptance {:.3}",
+                run.mse, run.relmse, run.mutations_per_second, run.acceptance
+            );
+            if seed == 0 {
+                let path = dir.join(stem);
+                let _ = render::image_io::write_exr(path.with_extension("exr"), &image);
+                let _ = render::image_io::write_png(path.with_extension("png"), &image, 0.0);
+            }
+            runs[m].push(run);
+        }
+    }
+    let _ = render::image_io::write_png(dir.join("reference.png"), &reference, 0.0);
+    let _ = writeln!(md, "\n### {name}\n");
+    let _ = writeln!(
+        md,
+        "| method | MSE median [min, max] | relMSE median [min, max] | kmut/s | acceptance | MSE / MMLT/K |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    let mmlt_mse = summary(&runs[1].iter().map(|r| r.mse).collect::<Vec<_>>()).0;
+    for ((label, ..), rs) in METHODS.iter().zip(&runs) {
+        let col = |f: fn(&Run) -> f64| summary(&rs.iter().map(f).collect::<Vec<_>>());
+        let (e, e0, e1) = col(|r| r.mse);
+        let (q, q0, q1) = col(|r| r.relmse);
+        let rate = col(|r| r.mutations_per_second).0;
+        let acc = col(|r| r.acceptance).0;
+        let _ = writeln!(
+            md,
+            "| {label} | {e:.3e} [{e0:.3e}, {e1:.3e}] | {q:.4} [{q0:.4}, {q1:.4}] | {:.1} | {acc:.3} | {:.2} |",
+            rate / 1e3,
+            e / mmlt_mse
+        );
+        for (seed, r) in rs.iter().enumerate() {
+            let _ = writeln!(
+                csv,
+                "{name},{label},{seed},{},{},{},{}",
+                r.mse, r.relmse, r.mutations_per_second, r.acceptance
+            );
+        }
+    }
+}
+
+fn main() {
+    let o = parse_options();
+    if let Err(e) = std::fs::create_dir_all(&o.out) {
+        usage(&format!("cannot create {}: {e}", o.out.display()));
+    }
+    let mut md = format!(
+        "# Langevin MLT, equal time\n\n{} s per render (bootstrap included), {} seeds, {}x{} pixels, max depth 5, large-step probability 0.3, {} threads.\n",
+        o.time,
+        o.seeds,
+        o.size,
+        o.size,
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    );
+    let mut csv = String::from("scene,method,seed,mse,relmse,mutations_per_second,acceptance\n");
+    for name in &o.scenes {
+        run_scene(&o, name, &mut md, &mut csv);
+    }
+    let _ = std::fs::write(o.out.join("results.md"), &md);
+    let _ = std::fs::write(o.out.join("results.csv"), &csv);
+    println!("{md}");
+    println!("wrote {}", o.out.display());
+}
