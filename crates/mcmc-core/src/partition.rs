@@ -5,15 +5,16 @@ use std::ops::Range;
 /// Maps a state to the id of the region containing it (`0..num_regions()`).
 ///
 /// Refinable partitions (quadtrees) can split a region: the split region's id is reused by
-/// one child, the other children get fresh ids at the end, so ids stay dense and callers keep
-/// per-region arrays by resizing.
+/// the first child, the other children get fresh ids at the end, so ids stay dense and callers
+/// keep per-region arrays by resizing.
 pub trait Partition<S> {
     /// The region containing `x`.
     fn region(&self, x: &S) -> usize;
     /// Number of regions (region ids are `0..num_regions()`).
     fn num_regions(&self) -> usize;
-    /// Splits `region`, returning the ids of all its children (including `region` itself,
-    /// which is reused by the first child), or `None` if the partition cannot refine it.
+    /// Splits `region`, returning the fresh ids of its other children (appended at the end:
+    /// `num_regions()` before the split `..` after), or `None` if the partition cannot refine
+    /// it. `region` itself is reused by the first child, so it is a child too.
     fn split(&mut self, region: usize) -> Option<Range<usize>> {
         let _ = region;
         None

@@ -53,6 +53,7 @@ mod error;
 mod independence;
 mod path;
 pub mod perturb;
+pub mod regional;
 mod sampler;
 mod scene;
 mod target;

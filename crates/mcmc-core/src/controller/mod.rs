@@ -59,8 +59,9 @@ pub trait RegionalTunable<S> {
     fn log_scale_of(&self, region: usize) -> f64;
     /// Sets `lambda` of a region.
     fn set_log_scale_of(&mut self, region: usize, lambda: f64);
-    /// Splits a region (children inherit its scale); returns the children's ids, or `None`
-    /// if the partition cannot refine.
+    /// Splits a region (children inherit its scale); returns the fresh ids of the children
+    /// other than `region` itself (see [`crate::Partition::split`]), or `None` if the
+    /// partition cannot refine.
     fn split_region(&mut self, region: usize) -> Option<std::ops::Range<usize>> {
         let _ = region;
         None

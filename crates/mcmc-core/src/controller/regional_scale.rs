@@ -121,6 +121,8 @@ impl RegionalScale {
                     updates: (parent.updates / 4).max(1),
                 };
                 self.regions.resize(kernel.num_regions(), (child, 0));
+                // `k` itself is the first child (see `Partition::split`).
+                self.regions[k] = (child, 0);
                 for c in children {
                     self.regions[c] = (child, 0);
                 }

@@ -99,6 +99,7 @@ where
                 controller.contribute(kernel, &mut pooled);
             }
         }
+        <C as SharedController<K>>::end_round(&mut pooled);
         for job in jobs.iter_mut() {
             for (chain, _) in &mut job.chains {
                 let (kernel, controller) = chain.kernel_and_controller_mut();

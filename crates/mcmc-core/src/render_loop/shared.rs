@@ -22,6 +22,12 @@ pub trait SharedController<K: ?Sized> {
     fn contribute(&mut self, kernel: &mut K, pooled: &mut Self::Shared);
     /// Receives the statistics pooled over all chains since the start; may tune `kernel`.
     fn receive(&mut self, kernel: &mut K, pooled: &Self::Shared);
+    /// Called once per round, after every chain's [`SharedController::contribute`] and before
+    /// any [`SharedController::receive`]: work on the pooled statistics as a whole at the
+    /// synchronisation point (e.g. refining a shared partition). The default does nothing.
+    fn end_round(pooled: &mut Self::Shared) {
+        let _ = pooled;
+    }
 }
 
 impl<K: ?Sized> SharedController<K> for NoAdaptation {
@@ -37,7 +43,8 @@ impl<K: ?Sized> SharedController<K> for GlobalScale {
     fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
 }
 
-/// Regional scales are per chain for now (the regional-adaptation issue shares them).
+/// `RegionalScale` adapts per chain; `pathspace::regional::SharedRegionalAdaptation` is the
+/// regional controller whose statistics are shared through this hook.
 impl<K: ?Sized> SharedController<K> for RegionalScale {
     type Shared = ();
     fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}

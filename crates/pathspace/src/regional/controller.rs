@@ -1,0 +1,447 @@
+//! Regional adaptation (regional-adaptive paper, Alg. 1, eq. 4-6) with statistics shared by
+//! all chains through the render loop's round hook, and quadtree refinement (section 6.2) at
+//! those synchronisation points.
+
+use mcmc_core::controller::{AdaptState, RegionStats, ScaleAdaptParams};
+use mcmc_core::render_loop::SharedController;
+use mcmc_core::{Controller, Partition, StepInfo};
+
+use super::sigmas::{HasSharedSigmas, SharedSigmas};
+use crate::error::PathspaceError;
+use crate::path::Path;
+
+/// Most visits a chain's controller keeps between two synchronisation points; further visits
+/// of the round are not used for adaptation (a chain driven without a render loop never
+/// synchronises and would otherwise grow without bound).
+pub const MAX_VISITS_PER_ROUND: usize = 1 << 22;
+
+/// Parameters of shared regional adaptation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RegionalAdaptParams {
+    /// The sign rule of Alg. 1 per region: target acceptance `alpha*`, `L`, `gamma_max`,
+    /// `gamma_scale`, `lambda_0`, `lambda_min` (its `freeze_after_updates` is not used here;
+    /// see `freeze_after_mutations`).
+    pub adapt: ScaleAdaptParams,
+    /// `M_split`: at a refinement, split every leaf visited at least this many times since the
+    /// previous refinement (section 6.2); `None` never refines (grids, or a frozen tree).
+    pub split_after_visits: Option<u64>,
+    /// `M_refine`: refine at the first synchronisation point after every this many mutations
+    /// over all chains (section 6.2, 7).
+    pub refine_every: u64,
+    /// The mixture component that is the regional perturbation (0 in
+    /// [`crate::ra_mixture`]): only its proposals update `lambda` (Alg. 1 is about the
+    /// perturbation); visits for refinement count every step. `None`: every step is a
+    /// perturbation (a kernel that is only the perturbation).
+    pub perturbation_component: Option<usize>,
+    /// Finite adaptation: stop adapting and refining at the first synchronisation point after
+    /// this many mutations over all chains; `None` adapts forever (diminishing adaptation).
+    /// `Some(0)` never adapts (the FIXED variant with the same code path).
+    pub freeze_after_mutations: Option<u64>,
+}
+
+impl RegionalAdaptParams {
+    /// The paper's values (section 8.1): `L = 10`, `gamma_max = 1`, `gamma_scale = 5`,
+    /// `lambda_0 = 1`, `lambda_min = -30`, target acceptance 0.5 (the default of section 8.1;
+    /// 0.8 for the Necklace scene), `M_split = 5000`, `M_refine = 10^7`; the perturbation is
+    /// component 0 of [`crate::ra_mixture`]; diminishing adaptation (no freeze).
+    #[must_use]
+    pub const fn otsu2018() -> Self {
+        Self {
+            adapt: ScaleAdaptParams::otsu2018(),
+            split_after_visits: Some(5000),
+            refine_every: 10_000_000,
+            perturbation_component: Some(0),
+            freeze_after_mutations: None,
+        }
+    }
+
+    /// Checks every field's range.
+    ///
+    /// # Errors
+    /// [`PathspaceError::InvalidParameter`] naming the first field out of range.
+    pub fn validate(&self) -> Result<(), PathspaceError> {
+        self.adapt
+            .validate()
+            .map_err(|e| PathspaceError::InvalidParameter {
+                name: "adapt",
+                value: f64::NAN,
+                allowed: e.to_string(),
+            })?;
+        PathspaceError::check_range("refine_every", self.refine_every as f64, 1.0, f64::MAX)?;
+        if let Some(m) = self.split_after_visits {
+            PathspaceError::check_range("split_after_visits", m as f64, 1.0, f64::MAX)?;
+        }
+        Ok(())
+    }
+}
+
+impl Default for RegionalAdaptParams {
+    fn default() -> Self {
+        Self::otsu2018()
+    }
+}
+
+/// One visit of a chain's state to a region, recorded between synchronisation points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Visit {
+    region: u32,
+    perturbed: bool,
+    accept: f64,
+}
+
+/// Regional adaptation of the perturbation's scale with statistics shared by all chains
+/// (regional-adaptive paper, Alg. 1 and section 7), deterministic for any thread count.
+///
+/// Each chain's controller only *records* `(region of the current state, acceptance
+/// probability)` for every step. At the end of every round of mcmc-core's render loop
+/// ([`SharedController`]), the records of all chains are applied **in job and chain order**
+/// to one pooled set of Alg. 1 statistics `(i_k, A_k, n_k)` and scales `lambda_k`
+/// ([`PooledRegionalStats`]); then, at that synchronisation point, a due quadtree refinement
+/// runs ([`SharedController::end_round`]), and every chain receives the new scales (an
+/// [`std::sync::Arc`], no copy per chain). The paper shares the same statistics through
+/// atomics and a lock per update instead, whose result depends on thread timing.
+///
+/// # Alg. 1 as implemented
+/// Per region `k`, for each perturbation proposal from `k`: `A_k += alpha`, `i_k += 1`; when
+/// `i_k = L`: `lambda_k += gamma_{n_k} sgn(A_k / i_k - alpha*)` (eq. 5: low acceptance
+/// *shrinks* `lambda`; the prose's opposite reading is wrong), `gamma_n = min(gamma_max,
+/// gamma_scale n^{-1/2})` (eq. 6; Alg. 1 line 15 is garbled), `lambda >= lambda_min`, then
+/// `i_k = A_k = 0`, `n_k += 1`. The update fires after `L` visits and divides by the visits
+/// counted (Alg. 1's `i_k > L` would sum `L + 1` values and divide by `L`). This is
+/// mcmc-core's [`AdaptState::record`].
+///
+/// # Refinement (section 6.2)
+/// At the first synchronisation point after every `M_refine` mutations (all chains): every
+/// leaf visited at least `M_split` times since the previous refinement (every step counts a
+/// visit of its current state) splits into four, once per pass (children are not considered
+/// in the same pass); children inherit `lambda` and get `n = max(1, n_parent / 4)`,
+/// `i = A = 0`; then all visit counters restart at 0 (our reading: the paper leaves it open,
+/// practical path guiding resets per pass).
+///
+/// # Staleness
+/// Within a round a chain proposes with the scales published at the round's start, and its
+/// acceptance statistics drive updates only at the round's end. With `R` mutations per chain
+/// per round, a region's `lambda` lags by up to one round: at most `V_k / L` updates (with
+/// `V_k` the round's visits to `k`, all chains) are applied at once, each computed from
+/// acceptances observed at the old scale. The paper's atomics have a smaller lag (one
+/// update), in arbitrary order. A refinement likewise happens up to one round after the
+/// `M_refine`-th mutation. Neither affects validity (below), only how fast scales settle.
+///
+/// # Validity
+/// Between synchronisation points every chain runs a fixed Metropolis-Hastings kernel whose
+/// reverse density uses the scale of the *proposed* state's region (eq. 2-3), so each kernel
+/// leaves `pi` invariant. Adaptation is *diminishing* (Roberts & Rosenthal 2007): `gamma_n ->
+/// 0` in every region that keeps being visited; a split restarts its children at `n / 4`
+/// (`gamma` doubles), but a quadtree of bounded depth splits finitely often, so `gamma` still
+/// goes to 0. With `freeze_after_mutations` it is *finite* adaptation: after the freeze the
+/// chain is a plain MH chain with fixed scales ([`Controller::is_frozen`]). `lambda` is bounded
+/// below by `lambda_min`; above it is unbounded, but the kernel is continuous in `lambda` and
+/// tends to the uniform-azimuth, truncated-normal kernel with `sigma -> inf` (almost uniform
+/// `theta`), so large `lambda` is harmless.
+///
+/// # Example
+/// ```
+/// use pathspace::regional::{RegionalAdaptParams, SharedRegionalAdaptation};
+///
+/// let params = RegionalAdaptParams {
+///     split_after_visits: Some(200),
+///     refine_every: 20_000,
+///     ..RegionalAdaptParams::otsu2018()
+/// };
+/// let controller = SharedRegionalAdaptation::new(params).unwrap();
+/// assert_eq!(controller.params().adapt.updates_every, 10);
+/// ```
+/// (`tests/regional.rs` runs it through mcmc-core's `RenderLoop`.)
+#[derive(Clone, Debug)]
+pub struct SharedRegionalAdaptation {
+    params: RegionalAdaptParams,
+    visits: Vec<Visit>,
+    current_region: usize,
+    steps: u64,
+    dropped: u64,
+    frozen: bool,
+}
+
+impl SharedRegionalAdaptation {
+    /// A chain's controller (every chain gets one with the same parameters).
+    ///
+    /// # Errors
+    /// As [`RegionalAdaptParams::validate`].
+    pub fn new(params: RegionalAdaptParams) -> Result<Self, PathspaceError> {
+        params.validate()?;
+        Ok(Self {
+            params,
+            visits: Vec::new(),
+            current_region: 0,
+            steps: 0,
+            dropped: 0,
+            frozen: params.freeze_after_mutations == Some(0),
+        })
+    }
+
+    /// The parameters.
+    #[must_use]
+    pub fn params(&self) -> &RegionalAdaptParams {
+        &self.params
+    }
+
+    /// Visits dropped because a round exceeded [`MAX_VISITS_PER_ROUND`].
+    #[must_use]
+    pub fn dropped_visits(&self) -> u64 {
+        self.dropped
+    }
+}
+
+impl<K> Controller<K, Path> for SharedRegionalAdaptation
+where
+    K: HasSharedSigmas,
+    K::Partition: Partition<Path>,
+{
+    fn before_step(&mut self, kernel: &K, x: &Path) {
+        if self.frozen {
+            return;
+        }
+        if let Some(s) = kernel.shared_sigmas() {
+            self.current_region = s.get().partition().region(x);
+        }
+    }
+
+    fn after_step(&mut self, _kernel: &mut K, info: &StepInfo) {
+        self.steps += 1;
+        if self.frozen {
+            return;
+        }
+        if self.visits.len() >= MAX_VISITS_PER_ROUND {
+            self.dropped += 1;
+            return;
+        }
+        let perturbed = self
+            .params
+            .perturbation_component
+            .is_none_or(|c| c == info.component);
+        self.visits.push(Visit {
+            region: self.current_region as u32,
+            perturbed,
+            accept: info.accept_prob[0],
+        });
+    }
+
+    fn is_frozen(&self) -> bool {
+        self.frozen
+    }
+}
+
+/// The statistics of [`SharedRegionalAdaptation`] pooled over all chains: the published
+/// scales (partition and `lambda_k`) and Alg. 1's per-region state. It is the render loop's
+/// `LoopOutput::shared` at the end of a run (the learned scales, e.g. for a heat map).
+#[derive(Clone, Debug)]
+pub struct PooledRegionalStats<P> {
+    sigmas: Option<SharedSigmas<P>>,
+    regions: Vec<RegionStats>,
+    params: Option<RegionalAdaptParams>,
+    mutations: u64,
+    next_refine: u64,
+    refinements: u64,
+    splits: u64,
+    rounds: u64,
+    frozen: bool,
+}
+
+impl<P> Default for PooledRegionalStats<P> {
+    fn default() -> Self {
+        Self {
+            sigmas: None,
+            regions: Vec::new(),
+            params: None,
+            mutations: 0,
+            next_refine: 0,
+            refinements: 0,
+            splits: 0,
+            rounds: 0,
+            frozen: false,
+        }
+    }
+}
+
+impl<P: Partition<Path> + Clone> PooledRegionalStats<P> {
+    /// The published scales (`None` before the first synchronisation point).
+    #[must_use]
+    pub fn sigmas(&self) -> Option<&SharedSigmas<P>> {
+        self.sigmas.as_ref()
+    }
+
+    /// Alg. 1's state of region `k` and its visits since the last refinement.
+    #[must_use]
+    pub fn region_stats(&self, k: usize) -> Option<RegionStats> {
+        self.regions.get(k).copied()
+    }
+
+    /// Number of regions.
+    #[must_use]
+    pub fn num_regions(&self) -> usize {
+        self.regions.len()
+    }
+
+    /// Mutations of all chains pooled so far.
+    #[must_use]
+    pub fn mutations(&self) -> u64 {
+        self.mutations
+    }
+
+    /// Refinement passes run.
+    #[must_use]
+    pub fn refinements(&self) -> u64 {
+        self.refinements
+    }
+
+    /// Leaves split over all passes.
+    #[must_use]
+    pub fn splits(&self) -> u64 {
+        self.splits
+    }
+
+    /// Synchronisation points seen.
+    #[must_use]
+    pub fn rounds(&self) -> u64 {
+        self.rounds
+    }
+
+    /// True once adaptation has stopped (`freeze_after_mutations`).
+    #[must_use]
+    pub fn is_frozen(&self) -> bool {
+        self.frozen
+    }
+
+    /// Starts pooling from the scales of the first chain (all chains must share them).
+    fn init(&mut self, sigmas: &SharedSigmas<P>, params: RegionalAdaptParams) {
+        self.regions = vec![
+            RegionStats {
+                adapt: AdaptState::new(),
+                visits_since_refine: 0,
+            };
+            sigmas.get().num_regions()
+        ];
+        self.sigmas = Some(sigmas.clone());
+        self.params = Some(params);
+        self.next_refine = params.refine_every;
+        self.frozen = params.freeze_after_mutations == Some(0);
+    }
+
+    /// Applies one chain's visits of the round, in order (Alg. 1 lines 11-18).
+    fn apply(&mut self, visits: &[Visit], steps: u64) {
+        self.mutations += steps;
+        let (Some(sigmas), Some(params)) = (self.sigmas.as_mut(), self.params) else {
+            return;
+        };
+        if self.frozen || visits.is_empty() {
+            return;
+        }
+        let scales = sigmas.make_mut();
+        for v in visits {
+            let k = v.region as usize;
+            let Some(state) = self.regions.get_mut(k) else {
+                debug_assert!(false, "visit to region {k} of {}", scales.num_regions());
+                continue;
+            };
+            state.visits_since_refine += 1;
+            if v.perturbed {
+                if let Some(lambda) =
+                    state
+                        .adapt
+                        .record(v.accept, scales.lambdas()[k], &params.adapt)
+                {
+                    scales.set_lambda(k, lambda);
+                }
+            }
+        }
+    }
+
+    /// The synchronisation point, after every chain contributed its round (what
+    /// [`SharedController::end_round`] runs): freeze if due, else refine if due (section 6.2).
+    pub fn end_round(&mut self) {
+        self.rounds += 1;
+        let (Some(sigmas), Some(params)) = (self.sigmas.as_mut(), self.params) else {
+            return;
+        };
+        if self.frozen {
+            return;
+        }
+        if params
+            .freeze_after_mutations
+            .is_some_and(|f| self.mutations >= f)
+        {
+            self.frozen = true;
+            return;
+        }
+        let Some(threshold) = params.split_after_visits else {
+            return;
+        };
+        if self.mutations < self.next_refine {
+            return;
+        }
+        let before = self.regions.len();
+        if self.regions[..before]
+            .iter()
+            .any(|r| r.visits_since_refine >= threshold)
+        {
+            let scales = sigmas.make_mut();
+            // Only the leaves that existed before the pass are candidates (section 6.2).
+            for k in 0..before {
+                let parent = self.regions[k];
+                if parent.visits_since_refine < threshold || scales.split(k).is_none() {
+                    continue;
+                }
+                let child = RegionStats {
+                    adapt: AdaptState {
+                        visits: 0,
+                        accepted: 0.0,
+                        updates: (parent.adapt.updates / 4).max(1),
+                    },
+                    visits_since_refine: 0,
+                };
+                self.regions[k] = child;
+                self.regions.resize(scales.num_regions(), child);
+                self.splits += 1;
+            }
+        }
+        for r in &mut self.regions {
+            r.visits_since_refine = 0;
+        }
+        self.refinements += 1;
+        while self.next_refine <= self.mutations {
+            self.next_refine += params.refine_every;
+        }
+    }
+}
+
+impl<K> SharedController<K> for SharedRegionalAdaptation
+where
+    K: HasSharedSigmas,
+    K::Partition: Partition<Path> + Clone + Send + Sync + std::fmt::Debug,
+{
+    type Shared = PooledRegionalStats<K::Partition>;
+
+    fn contribute(&mut self, kernel: &mut K, pooled: &mut Self::Shared) {
+        if pooled.sigmas.is_none() {
+            if let Some(s) = kernel.shared_sigmas() {
+                pooled.init(s, self.params);
+            }
+        }
+        pooled.apply(&self.visits, self.steps);
+        self.visits.clear();
+        self.steps = 0;
+    }
+
+    fn receive(&mut self, kernel: &mut K, pooled: &Self::Shared) {
+        if let (Some(s), Some(mine)) = (&pooled.sigmas, kernel.shared_sigmas_mut()) {
+            if !mine.ptr_eq(s) {
+                *mine = s.clone();
+            }
+        }
+        self.frozen = pooled.frozen;
+    }
+
+    fn end_round(pooled: &mut Self::Shared) {
+        pooled.end_round();
+    }
+}

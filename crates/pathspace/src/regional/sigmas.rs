@@ -1,0 +1,243 @@
+//! Per-region angular scales over a path-space partition (regional-adaptive paper, section 5.2,
+//! eq. 2-3), shared read-only by all chains between synchronisation points.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use mcmc_core::{Mh, Mixture, Partition};
+
+use crate::combine::PathMutation;
+use crate::error::PathspaceError;
+use crate::path::Path;
+use crate::perturb::{DirectionKernel, Perturbation, ScaleSource};
+use crate::scene::PathScene;
+
+/// `lambda_k = log sigma_k^2` for every region `k` of a partition, as a [`ScaleSource`]:
+/// `sigmas(x) = [sigma_k, rho sigma_k]` with `k` the region of `x` and `sigma_k = e^{lambda_k / 2}`
+/// (Alg. 1 line 9).
+///
+/// One `lambda` per region drives both scales of the multi-chain perturbation (`sigma_1` for
+/// the primary ray, `sigma_2 = rho sigma_1` for the later chains, `rho` = `sigma_ratio`, 1 by
+/// default): the paper adapts a single scalar per region from the acceptance of the whole
+/// perturbation (section 9, "a single scalar parameter lambda is used to control the
+/// perturbation of a high dimensional kernel"), so one acceptance rate tunes one number.
+///
+/// # Example
+/// ```
+/// use mcmc_core::Partition;
+/// use pathspace::analytic::AnalyticScene;
+/// use pathspace::regional::{PathPartition, PlanePartition, RegionalSigmas, ScreenPartition};
+///
+/// let scene = AnalyticScene::test_box().unwrap();
+/// let screen = ScreenPartition::new(&scene, PlanePartition::quadtree(6).unwrap());
+/// let mut sigmas = RegionalSigmas::new(PathPartition::Screen(screen), 1.0, 1.0).unwrap();
+/// sigmas.set_lambda(0, (0.1f64 * 0.1).ln());
+/// assert_eq!(sigmas.split(0), Some(1..4));
+/// // Children inherit the parent's scale (section 6.2).
+/// assert!(sigmas.lambdas().iter().all(|&l| (l - (0.01f64).ln()).abs() < 1e-12));
+/// assert!((sigmas.sigmas_of_region(2)[0] - 0.1).abs() < 1e-12);
+/// ```
+#[derive(Clone, Debug)]
+pub struct RegionalSigmas<P> {
+    partition: P,
+    lambdas: Vec<f64>,
+    sigma_ratio: f64,
+}
+
+impl<P: Partition<Path>> RegionalSigmas<P> {
+    /// Every region of `partition` at `lambda0` (the paper's `lambda_0 = 1`, section 8.1), with
+    /// `sigma_2 = sigma_ratio * sigma_1`.
+    ///
+    /// # Errors
+    /// [`PathspaceError::InvalidParameter`] for a non-finite `lambda0` or a ratio outside
+    /// `[1e-6, 1e6]`.
+    pub fn new(partition: P, lambda0: f64, sigma_ratio: f64) -> Result<Self, PathspaceError> {
+        PathspaceError::check_range("lambda0", lambda0, -700.0, 700.0)?;
+        PathspaceError::check_range("sigma_ratio", sigma_ratio, 1e-6, 1e6)?;
+        let n = partition.num_regions();
+        Ok(Self {
+            partition,
+            lambdas: vec![lambda0; n],
+            sigma_ratio,
+        })
+    }
+
+    /// The partition.
+    #[must_use]
+    pub fn partition(&self) -> &P {
+        &self.partition
+    }
+
+    /// `lambda_k` per region id.
+    #[must_use]
+    pub fn lambdas(&self) -> &[f64] {
+        &self.lambdas
+    }
+
+    /// Number of regions.
+    #[must_use]
+    pub fn num_regions(&self) -> usize {
+        self.lambdas.len()
+    }
+
+    /// Sets `lambda` of a region.
+    ///
+    /// # Panics
+    /// If `region >= num_regions()`.
+    pub fn set_lambda(&mut self, region: usize, lambda: f64) {
+        self.lambdas[region] = lambda;
+    }
+
+    /// `sigma_2 / sigma_1`.
+    #[must_use]
+    pub fn sigma_ratio(&self) -> f64 {
+        self.sigma_ratio
+    }
+
+    /// `[sigma_1, sigma_2]` of a region.
+    ///
+    /// # Panics
+    /// If `region >= num_regions()`.
+    #[must_use]
+    pub fn sigmas_of_region(&self, region: usize) -> [f64; 2] {
+        let s = (0.5 * self.lambdas[region]).exp();
+        [s, s * self.sigma_ratio]
+    }
+
+    /// Splits a region of the partition; every child inherits its `lambda` (section 6.2).
+    /// Returns the fresh ids (the split id is the first child), `None` if it cannot split.
+    pub fn split(&mut self, region: usize) -> Option<Range<usize>> {
+        let fresh = self.partition.split(region)?;
+        let parent = self.lambdas[region];
+        self.lambdas.resize(self.partition.num_regions(), parent);
+        for k in fresh.clone() {
+            self.lambdas[k] = parent;
+        }
+        Some(fresh)
+    }
+}
+
+impl<P: Partition<Path>> ScaleSource for RegionalSigmas<P> {
+    fn sigmas(&self, x: &Path) -> [f64; 2] {
+        self.sigmas_of_region(self.partition.region(x))
+    }
+}
+
+/// A [`RegionalSigmas`] behind an [`Arc`]: what every chain's perturbation holds. Chains read
+/// it without locks; the shared controller
+/// ([`crate::regional::SharedRegionalAdaptation`]) publishes a new one at each
+/// synchronisation point of the render loop. Cloning is cheap (a reference count).
+#[derive(Clone, Debug)]
+pub struct SharedSigmas<P>(Arc<RegionalSigmas<P>>);
+
+impl<P> SharedSigmas<P> {
+    /// Shares `sigmas`.
+    pub fn new(sigmas: RegionalSigmas<P>) -> Self {
+        Self(Arc::new(sigmas))
+    }
+
+    /// The scales.
+    #[must_use]
+    pub fn get(&self) -> &RegionalSigmas<P> {
+        &self.0
+    }
+
+    /// Mutable access, copying the scales first if another holder still shares them.
+    pub fn make_mut(&mut self) -> &mut RegionalSigmas<P>
+    where
+        P: Clone,
+    {
+        Arc::make_mut(&mut self.0)
+    }
+
+    /// True if both share the same allocation.
+    #[must_use]
+    pub fn ptr_eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+impl<P: Partition<Path>> ScaleSource for SharedSigmas<P> {
+    fn sigmas(&self, x: &Path) -> [f64; 2] {
+        self.0.sigmas(x)
+    }
+}
+
+/// A kernel (or a proposal inside one) that perturbs with [`SharedSigmas`]: how the shared
+/// controller finds the scales to read regions from and to replace at synchronisation points.
+///
+/// Implemented by [`SharedSigmas`] itself, a [`Perturbation`] over them, a [`PathMutation`]
+/// (its perturbation), a [`Mixture`] (its first component that has them) and [`Mh`].
+pub trait HasSharedSigmas {
+    /// The partition type.
+    type Partition;
+    /// The scales, if this kernel has them.
+    fn shared_sigmas(&self) -> Option<&SharedSigmas<Self::Partition>>;
+    /// Mutable access to the scales, if this kernel has them.
+    fn shared_sigmas_mut(&mut self) -> Option<&mut SharedSigmas<Self::Partition>>;
+}
+
+impl<P> HasSharedSigmas for SharedSigmas<P> {
+    type Partition = P;
+    fn shared_sigmas(&self) -> Option<&SharedSigmas<P>> {
+        Some(self)
+    }
+    fn shared_sigmas_mut(&mut self) -> Option<&mut SharedSigmas<P>> {
+        Some(self)
+    }
+}
+
+impl<S, K, P> HasSharedSigmas for Perturbation<'_, S, SharedSigmas<P>, K>
+where
+    S: PathScene + ?Sized,
+    K: DirectionKernel,
+    P: Partition<Path>,
+{
+    type Partition = P;
+    fn shared_sigmas(&self) -> Option<&SharedSigmas<P>> {
+        Some(self.scale())
+    }
+    fn shared_sigmas_mut(&mut self) -> Option<&mut SharedSigmas<P>> {
+        Some(self.scale_mut())
+    }
+}
+
+impl<X: HasSharedSigmas, G> HasSharedSigmas for PathMutation<X, G> {
+    type Partition = X::Partition;
+    fn shared_sigmas(&self) -> Option<&SharedSigmas<X::Partition>> {
+        match self {
+            Self::Perturb(p) => p.shared_sigmas(),
+            Self::Global(_) => None,
+        }
+    }
+    fn shared_sigmas_mut(&mut self) -> Option<&mut SharedSigmas<X::Partition>> {
+        match self {
+            Self::Perturb(p) => p.shared_sigmas_mut(),
+            Self::Global(_) => None,
+        }
+    }
+}
+
+impl<X: HasSharedSigmas, Sel> HasSharedSigmas for Mixture<X, Sel> {
+    type Partition = X::Partition;
+    fn shared_sigmas(&self) -> Option<&SharedSigmas<X::Partition>> {
+        self.components()
+            .iter()
+            .find_map(HasSharedSigmas::shared_sigmas)
+    }
+    fn shared_sigmas_mut(&mut self) -> Option<&mut SharedSigmas<X::Partition>> {
+        self.components_mut()
+            .iter_mut()
+            .find_map(HasSharedSigmas::shared_sigmas_mut)
+    }
+}
+
+impl<X: HasSharedSigmas> HasSharedSigmas for Mh<X> {
+    type Partition = X::Partition;
+    fn shared_sigmas(&self) -> Option<&SharedSigmas<X::Partition>> {
+        self.proposal.shared_sigmas()
+    }
+    fn shared_sigmas_mut(&mut self) -> Option<&mut SharedSigmas<X::Partition>> {
+        self.proposal.shared_sigmas_mut()
+    }
+}
