@@ -191,6 +191,15 @@ pub(crate) fn mala_preset(text: &str) -> Result<mcmc_core::langevin::LangevinPar
     }
 }
 
+/// Parses `--perturbation`.
+pub(crate) fn perturbation(text: &str) -> Result<pathspace::PerturbationKind, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "lens" => Ok(pathspace::PerturbationKind::Lens),
+        "multichain" | "multi-chain" => Ok(pathspace::PerturbationKind::MultiChain),
+        _ => Err(format!("expected lens or multichain, got '{text}'")),
+    }
+}
+
 /// Parses `--dr-on`.
 pub(crate) fn dr_on(text: &str) -> Result<render::mlt::dr::DrBase, String> {
     match text.trim().to_ascii_lowercase().as_str() {

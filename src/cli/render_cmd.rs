@@ -107,6 +107,10 @@ pub(crate) struct RenderArgs {
     /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).
     #[arg(long, value_name = "pssmlt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
     dr_on: DrBase,
+    /// pathmlt: the perturbation mixed with the bidirectional mutation (0.5 each, RA paper
+    /// section 8.1), `lens` or `multichain`.
+    #[arg(long, value_name = "lens|multichain", default_value = "lens", value_parser = parse::perturbation)]
+    perturbation: pathspace::PerturbationKind,
     /// mala*: parameter preset, `paper` (Luan et al. 2020, section 7: epsilon 0.01, K 30,
     /// H 10000) or `code` (the authors' code: epsilon 0.005, K 5, H 3000, preconditioner
     /// clamped to [0.01, 100], shrink prior 0.005).
@@ -242,6 +246,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
                 max_depth: args.mala_max_depth,
                 ..render::mlt::mala::MalaConfig::default()
             },
+            perturbation: args.perturbation,
         },
         strategy_images: args.strategy_images,
     }

@@ -51,6 +51,7 @@ pub mod material;
 pub mod mesh;
 pub mod metrics;
 pub mod mlt;
+pub mod pathspace_scene;
 pub mod sampler;
 pub mod scene;
 pub mod session;

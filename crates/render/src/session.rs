@@ -43,6 +43,9 @@ pub struct McmcSettings {
     /// Langevin MLT (`mala*`, and `drmlt` with `cheap-then-expensive`): parameters, the
     /// depth rule, the finite-difference step (the variant comes from the integrator).
     pub mala: MalaConfig,
+    /// Path-space MLT (`pathmlt`): the perturbation mixed with the bidirectional mutation
+    /// (default lens).
+    pub perturbation: pathspace::PerturbationKind,
 }
 
 impl Default for McmcSettings {
@@ -55,6 +58,7 @@ impl Default for McmcSettings {
             dr_variant: DrVariant::Orbital,
             dr_on: DrBase::Pssmlt,
             mala: MalaConfig::default(),
+            perturbation: pathspace::PerturbationKind::Lens,
         }
     }
 }
@@ -230,7 +234,8 @@ pub fn render(
         | IntegratorKind::Mala
         | IntegratorKind::MalaOnline
         | IntegratorKind::MalaCache
-        | IntegratorKind::MalaHybrid => {
+        | IntegratorKind::MalaHybrid
+        | IntegratorKind::PathMlt => {
             // BDPT and the MCMC targets use the scene's camera: set it to the image size.
             let mut sized;
             let scene = if (scene.camera().width(), scene.camera().height())
@@ -242,14 +247,15 @@ pub fn render(
                 sized.set_resolution(settings.width, settings.height);
                 &sized
             };
-            let out = pool.install(|| {
-                if settings.integrator == IntegratorKind::Bdpt {
-                    render_bdpt(scene, settings, start, progress, cancel)
-                } else {
-                    render_bidirectional(scene, settings, start, progress, cancel)
+            pool.install(|| match settings.integrator {
+                IntegratorKind::Bdpt => Ok(render_bdpt(scene, settings, start, progress, cancel)),
+                IntegratorKind::PathMlt => {
+                    mlt::pathmlt::render_session(scene, settings, start, progress, cancel)
                 }
-            });
-            Ok(out)
+                _ => Ok(render_bidirectional(
+                    scene, settings, start, progress, cancel,
+                )),
+            })
         }
     }
 }

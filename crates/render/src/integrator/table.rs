@@ -33,6 +33,9 @@ pub enum IntegratorKind {
     MalaCache,
     /// Langevin MLT with hybrid adaptation.
     MalaHybrid,
+    /// Path-space MLT (Veach & Guibas 1997; Otsu et al. 2018, section 8.1) over `pathspace`
+    /// ([`crate::mlt::pathmlt`]).
+    PathMlt,
 }
 
 /// One row of the integrator table.
@@ -118,6 +121,12 @@ pub const INTEGRATORS: &[IntegratorInfo] = &[
         is_mcmc: true,
         kind: IntegratorKind::MalaHybrid,
     },
+    IntegratorInfo {
+        name: "pathmlt",
+        description: "path-space MLT (Veach & Guibas 1997): a lens or multi-chain perturbation (--perturbation) and the bidirectional mutation, 0.5 each; pinhole camera and area lights only",
+        is_mcmc: true,
+        kind: IntegratorKind::PathMlt,
+    },
 ];
 
 impl IntegratorKind {
@@ -192,16 +201,18 @@ mod tests {
         // Every variant has a row; the match has no wildcard arm, so a new variant does not
         // compile here until it is added to `all` (and then needs its row).
         use IntegratorKind::{
-            Bdpt, Drmlt, Lqmc, Mala, MalaCache, MalaHybrid, MalaOnline, Mmlt, Pssmlt, Pt, Qmc,
+            Bdpt, Drmlt, Lqmc, Mala, MalaCache, MalaHybrid, MalaOnline, Mmlt, PathMlt, Pssmlt, Pt,
+            Qmc,
         };
         let all = [
             Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc, Lqmc, Mala, MalaOnline, MalaCache, MalaHybrid,
+            PathMlt,
         ];
         assert_eq!(all.len(), INTEGRATORS.len());
         for kind in all {
             match kind {
                 Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc | Lqmc | Mala | MalaOnline | MalaCache
-                | MalaHybrid => {
+                | MalaHybrid | PathMlt => {
                     assert_eq!(kind.info().kind, kind)
                 }
             }

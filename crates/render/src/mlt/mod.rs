@@ -4,9 +4,13 @@
 pub mod dr;
 pub mod mala;
 mod path_sampler;
+pub mod pathmlt;
 mod run;
 mod stage_map;
 
 pub use path_sampler::{MmltTarget, PathPayload, PssmltTarget, PATH_STREAMS};
-pub use run::{render_mlt, render_mlt_per_chain, LargeStepMode, MltBudget, MltOutput, MltSettings};
+pub use run::{
+    render_mlt, render_mlt_per_chain, render_mlt_with_states, LargeStepMode, MltBudget, MltOutput,
+    MltSettings,
+};
 pub use stage_map::StagedSplats;

@@ -8,7 +8,8 @@ use std::time::Duration;
 
 use mcmc_core::controller::{AutoLargeStep, LargeStepEstimate, LargeStepStats, LargeStepTunable};
 use mcmc_core::render_loop::{
-    ChainSlot, LoopBudget, LoopOutput, LoopSettings, RenderLoop, SharedController, SplatPayload,
+    ChainSlot, IndependentStates, LoopBudget, LoopOutput, LoopSettings, RenderLoop,
+    SharedController, SplatPayload,
 };
 use mcmc_core::stats::AcceptanceStats;
 use mcmc_core::{Controller, Kernel, NoAdaptation, Progress, Target};
@@ -205,8 +206,34 @@ where
     K: Kernel<T> + Send,
     C: Controller<K, PssState> + SharedController<K> + Send,
 {
+    let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
+        .unwrap_or_else(|_| unreachable!("clamped to 1..=4"));
+    let (p, auto) = match settings.large_step {
+        LargeStepMode::Fixed(p) => (p, false),
+        LargeStepMode::Auto { initial, .. } => (initial, true),
+    };
+    let mut result = render_mlt_with_states(
+        targets,
+        &states,
+        |slot: ChainSlot| make_kernel(slot, p),
+        make_controller,
+        settings,
+        progress,
+        cancel,
+    );
+    result.final_large_step_probability = p;
+    if auto {
+        result.notes.push(format!(
+            "automatic large-step control is not run with this integrator: fixed p_large = {p}"
+        ));
+    }
+    result
+}
+
+/// The loop settings of an MCMC render.
+fn loop_settings(settings: &MltSettings) -> LoopSettings {
     let pixels = (settings.width * settings.height) as f64;
-    let loop_settings = LoopSettings {
+    LoopSettings {
         chains: settings.chains.max(1),
         bootstrap_samples: settings.bootstrap_samples.max(1) as u64,
         budget: match settings.budget {
@@ -217,30 +244,41 @@ where
         },
         seed: settings.seed,
         ..LoopSettings::default()
-    };
-    let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
-        .unwrap_or_else(|_| unreachable!("clamped to 1..=4"));
+    }
+}
+
+/// As [`render_mlt_per_chain`] over any state type: the chains' independent states (the
+/// bootstrap and the chain starts) come from `states`, whose weights `f / p` make the
+/// bootstrap estimate `b` (path-space MLT: `pathspace::Path` drawn by an independent path
+/// sampler, [`super::pathmlt`]). `settings.streams` and `settings.large_step` are not used.
+/// The image is `b W H / N` times the expected-value splat sums (splat rasters in pixels).
+pub fn render_mlt_with_states<T, St, K, C>(
+    targets: &[T],
+    states: &St,
+    make_kernel: impl Fn(ChainSlot) -> K + Sync,
+    make_controller: impl Fn(ChainSlot) -> C + Sync,
+    settings: &MltSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> MltOutput
+where
+    T: Target,
+    T::Payload: SplatPayload,
+    St: IndependentStates<T::State>,
+    K: Kernel<T> + Send,
+    C: Controller<K, T::State> + SharedController<K> + Send,
+{
     let (w, h) = (settings.width, settings.height);
     let stage_map = settings.stage_map;
-    let (p, auto) = match settings.large_step {
-        LargeStepMode::Fixed(p) => (p, false),
-        LargeStepMode::Auto { initial, .. } => (initial, true),
-    };
     let out = RenderLoop {
         targets,
-        states: &states,
-        kernel: |slot: ChainSlot| make_kernel(slot, p),
+        states,
+        kernel: &make_kernel,
         controller: &make_controller,
         sink: || StagedSplats::new(w, h, stage_map),
     }
-    .run(&loop_settings, progress, cancel);
-    let mut result = finish(out, settings, p, |_| None);
-    if auto {
-        result.notes.push(format!(
-            "automatic large-step control is not run with this integrator: fixed p_large = {p}"
-        ));
-    }
-    result
+    .run(&loop_settings(settings), progress, cancel);
+    finish(out, settings, 0.0, |_| None)
 }
 
 /// Turns the loop's output into an [`MltOutput`].
