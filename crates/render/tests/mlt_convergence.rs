@@ -38,6 +38,10 @@ mod common;
 use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
+use common::stats::{
+    assert_finite_non_negative, block_means, mean_se, pixel_mean_and_var_of_mean, rounded,
+    t_critical,
+};
 use common::{analytic_enclosure, enclosure_radiance, ENCLOSURE_ALBEDO, ENCLOSURE_LE};
 use glam::{Mat4, Vec3, Vec3A};
 use mcmc_core::{Mh, Target};
@@ -72,65 +76,11 @@ const N_COMPARISONS: usize =
     (2 + 4 + 5) + (ENCLOSURE_DEPTH as usize + 1) + 11 * (1 + BLOCKS * BLOCKS);
 
 // ---------------------------------------------------------------------------------------------
-// Student's t.
-
-/// `P(|T| >= t)` for Student's t with `df >= 1` degrees of freedom, exact for integer `df`
-/// (Abramowitz & Stegun 26.7.3 for odd, 26.7.4 for even `df`; `theta = atan(t / sqrt(df))`).
-fn t_two_sided_p(t: f64, df: u32) -> f64 {
-    assert!(df >= 1);
-    let theta = (t.abs() / f64::from(df).sqrt()).atan();
-    let (s, c) = theta.sin_cos();
-    let c2 = c * c;
-    let a = if df % 2 == 1 {
-        // (2/pi) [theta + sin(theta) (cos + 2/3 cos^3 + ... + (2*4..(df-3))/(1*3..(df-2)) cos^(df-2))]
-        let mut sum = 0.0;
-        if df > 1 {
-            let mut term = c;
-            sum = term;
-            for k in 1..=(df - 3) / 2 {
-                term *= c2 * f64::from(2 * k) / f64::from(2 * k + 1);
-                sum += term;
-            }
-        }
-        2.0 / std::f64::consts::PI * (theta + s * sum)
-    } else {
-        // sin(theta) [1 + 1/2 cos^2 + 1*3/(2*4) cos^4 + ... + (1*3..(df-3))/(2*4..(df-2)) cos^(df-2)]
-        let mut term = 1.0;
-        let mut sum = 1.0;
-        for k in 1..=(df - 2) / 2 {
-            term *= c2 * f64::from(2 * k - 1) / f64::from(2 * k);
-            sum += term;
-        }
-        s * sum
-    };
-    (1.0 - a).clamp(0.0, 1.0)
-}
-
-/// The two-sided critical value: `t` with `P(|T| >= t) = alpha` (bisection).
-fn t_critical(alpha: f64, df: u32) -> f64 {
-    let (mut lo, mut hi) = (0.0f64, 1e4f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if t_two_sided_p(mid, df) > alpha {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
+// Student's t (`common::stats`).
 
 /// The critical value of the replicate comparisons (Bonferroni over `N_COMPARISONS`).
 fn critical() -> f64 {
     t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R.min(K) - 1) as u32)
-}
-
-/// Mean and standard error of the mean of i.i.d. values.
-fn mean_se(xs: &[f64]) -> (f64, f64) {
-    let n = xs.len() as f64;
-    let m = xs.iter().sum::<f64>() / n;
-    let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
 }
 
 #[test]
@@ -274,15 +224,6 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
 }
 
 /// Every channel of every pixel finite and non-negative.
-fn assert_finite_non_negative(image: &Image, what: &str) {
-    for (i, p) in image.pixels.iter().enumerate() {
-        assert!(
-            p.iter().all(|c| c.is_finite() && *c >= 0.0),
-            "{what}: pixel {i} = {p:?}"
-        );
-    }
-}
-
 /// `R` replicate renders with seeds `seed0 + r`; checks that each ran to completion and that
 /// its image is finite and non-negative.
 fn replicates(
@@ -311,44 +252,6 @@ fn replicates(
             out.image
         })
         .collect()
-}
-
-/// Mean luminance of each of the `BLOCKS x BLOCKS` blocks (row-major).
-fn block_means(image: &Image) -> Vec<f64> {
-    let (w, h) = (image.width, image.height);
-    let mut sums = [0.0f64; BLOCKS * BLOCKS];
-    let mut counts = [0usize; BLOCKS * BLOCKS];
-    for y in 0..h {
-        for x in 0..w {
-            let k = (y * BLOCKS / h) * BLOCKS + x * BLOCKS / w;
-            sums[k] += f64::from(image.luminance(x, y));
-            counts[k] += 1;
-        }
-    }
-    sums.iter()
-        .zip(&counts)
-        .map(|(s, &c)| s / c as f64)
-        .collect()
-}
-
-/// Per-pixel, per-channel mean over replicate images and the variance of that mean.
-fn pixel_mean_and_var_of_mean(images: &[Image]) -> (Image, Vec<[f64; 3]>) {
-    let (w, h) = (images[0].width, images[0].height);
-    let mut mean = Image::new(w, h);
-    let mut var = vec![[0.0f64; 3]; w * h];
-    for (i, (m_px, v_px)) in mean.pixels.iter_mut().zip(&mut var).enumerate() {
-        for (c, (m_c, v_c)) in m_px.iter_mut().zip(v_px.iter_mut()).enumerate() {
-            let values: Vec<f64> = images.iter().map(|im| f64::from(im.pixels[i][c])).collect();
-            let (m, se) = mean_se(&values);
-            *m_c = m as f32;
-            *v_c = se * se;
-        }
-    }
-    (mean, var)
-}
-
-fn rounded(xs: &[f64]) -> Vec<f64> {
-    xs.iter().map(|x| (x * 100.0).round() / 100.0).collect()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -489,8 +392,8 @@ fn reference() -> &'static [Image] {
 
 /// Per block: (t statistic against the reference, MCMC mean, its se, reference mean, its se).
 fn block_t(images: &[Image], reference: &[Image]) -> Vec<[f64; 5]> {
-    let mlt: Vec<Vec<f64>> = images.iter().map(block_means).collect();
-    let rf: Vec<Vec<f64>> = reference.iter().map(block_means).collect();
+    let mlt: Vec<Vec<f64>> = images.iter().map(|im| block_means(im, BLOCKS)).collect();
+    let rf: Vec<Vec<f64>> = reference.iter().map(|im| block_means(im, BLOCKS)).collect();
     (0..BLOCKS * BLOCKS)
         .map(|k| {
             let (mm, sm) = mean_se(&mlt.iter().map(|b| b[k]).collect::<Vec<_>>());

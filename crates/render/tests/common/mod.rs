@@ -1,6 +1,8 @@
 //! Shared fixtures of the render integration tests.
 #![allow(dead_code, unreachable_pub)]
 
+pub mod stats;
+
 use glam::{Vec2, Vec3, Vec3A};
 use render::scene::{CameraSpec, Material, Mesh, Scene};
 
