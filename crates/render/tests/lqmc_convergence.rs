@@ -153,8 +153,8 @@ fn replicates(method: Method, scene: &Scene, spp: u32, max_depth: u32, seed0: u6
 /// Image mean luminance, then the `BLOCKS x BLOCKS` block means.
 fn statistics(image: &Image) -> Vec<f64> {
     let (w, h) = (image.width, image.height);
-    let mut sums = vec![0.0f64; 1 + BLOCKS * BLOCKS];
-    let mut counts = vec![0usize; 1 + BLOCKS * BLOCKS];
+    let mut sums = [0.0f64; 1 + BLOCKS * BLOCKS];
+    let mut counts = [0usize; 1 + BLOCKS * BLOCKS];
     for y in 0..h {
         for x in 0..w {
             let l = f64::from(image.luminance(x, y));

@@ -144,6 +144,13 @@ impl VertexPath {
     }
 }
 
+/// True if `x > 0` (false for NaN): the test every density and cosine passes before use.
+#[inline]
+#[must_use]
+pub fn positive<T: PartialOrd + Default>(x: T) -> bool {
+    x > T::default()
+}
+
 /// How far [`trace`] goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TraceLimit {
@@ -330,7 +337,7 @@ pub fn nee_towards(
     ls: &LightSample,
     check_visibility: bool,
 ) -> Option<(Vec3, f32)> {
-    if ls.radiance == Vec3::ZERO || !(ls.pdf > 0.0) {
+    if ls.radiance == Vec3::ZERO || !positive(ls.pdf) {
         return None;
     }
     if !shading_consistent(wo_world, ls.wi, si.ng, si.ns) {
@@ -371,7 +378,7 @@ mod tests {
     #[test]
     fn events_sum_to_the_path_tracer_estimate() {
         let scene = Scene::cornell_box(16, 16);
-        let camera = scene.camera().clone();
+        let camera = *scene.camera();
         let mut s = IndependentSampler::new(5);
         let mut path = VertexPath::default();
         let limit = TraceLimit {

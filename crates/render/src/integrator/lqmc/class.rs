@@ -7,7 +7,7 @@ use glam::Vec3A;
 
 use super::LqmcParams;
 use crate::camera::Camera;
-use crate::integrator::vertex_path::{bounce_dim, EventKind, PathEvent, PathVertex};
+use crate::integrator::vertex_path::{bounce_dim, positive, EventKind, PathEvent, PathVertex};
 
 /// The class of a path (section 4 "Parameters"): it selects `N`, the tile counts and the
 /// breakup rule.
@@ -46,7 +46,7 @@ pub(crate) fn circle_of_confusion(camera: &Camera, p: Vec3A, time: f32) -> f32 {
     let pose = camera.pose_at(time);
     let z = pose.to_camera(p - pose.origin).z;
     let f = camera.focus_distance();
-    if !(z > 0.0) {
+    if !positive(z) {
         return 0.0;
     }
     let pixels_per_unit =

@@ -16,7 +16,7 @@ use crate::frame::shading_consistent;
 use crate::integrator::halton_sampler::{HaltonSampler, ReplaySampler};
 use crate::integrator::power_heuristic;
 use crate::integrator::vertex_path::{
-    bounce_dim, nee, nee_towards, trace, EventKind, PathEvent, TraceLimit, VertexPath,
+    bounce_dim, nee, nee_towards, positive, trace, EventKind, PathEvent, TraceLimit, VertexPath,
 };
 use crate::material::TransportMode;
 use crate::scene::Scene;
@@ -408,7 +408,7 @@ impl Context<'_> {
         let wi_b = zb.frame.to_local(dir);
         let f_b = zb.bsdf.eval(wo_b, wi_b, TransportMode::Radiance) * wi_b.z.abs();
         let pdf_b = zb.bsdf.pdf(wo_b, wi_b, TransportMode::Radiance);
-        if !(pdf_b > 0.0) || f_b == Vec3::ZERO || !(dist2 > 0.0) || !(cos_next > 0.0) {
+        if !positive(pdf_b) || f_b == Vec3::ZERO || !positive(dist2) || !positive(cos_next) {
             return None;
         }
         let visible = match next {
@@ -461,7 +461,7 @@ impl Context<'_> {
         let wi1 = z1.frame.to_local(out.wi);
         let f1 = z1.bsdf.eval(wo1, wi1, TransportMode::Radiance) * wi1.z.abs();
         let pdf1 = z1.bsdf.pdf(wo1, wi1, TransportMode::Radiance);
-        if !(pdf1 > 0.0) {
+        if !positive(pdf1) {
             return None;
         }
         q *= f64::from(pdf1);
@@ -572,11 +572,11 @@ impl LocalIntegrand for Member<'_, '_> {
         breakup_weights(ctx.params, self.rough, ctx.class, self.weights);
         let total: f64 = self.weights.iter().sum();
         let p_b = self.weights[ctx.b - 1] / total;
-        if !(p_b > 0.0) {
+        if !positive(p_b) {
             return None;
         }
         let (value, q) = ctx.evaluate(self.member)?;
-        if value == Vec3::ZERO || !(q > 0.0) {
+        if value == Vec3::ZERO || !positive(q) {
             return None;
         }
         Some(rebuilt(ctx.params, self.member.raster, value, q, p_b))
