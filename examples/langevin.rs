@@ -18,8 +18,9 @@
 //! `results.md`, `results.csv` and the seed-0 images (EXR and PNG) of every method to `--out`
 //! (default `target/langevin`). docs/methods/mala.md reports a run.
 //!
-//! `cargo run --release --example langevin -- [--time 3] [--seeds 5] [--size 64] [--out DIR]
-//! [scene ...]`
+//! `cargo run --release --example langevin -- [--time 3 | --spp N] [--seeds 5] [--size 64]
+//! [--out DIR] [scene ...]` (`--spp`: equal mutations per pixel instead of equal time, to
+//! separate a method's cost per mutation from its efficiency per mutation).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -35,6 +36,8 @@ use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, 
 /// Command-line options.
 struct Options {
     time: f64,
+    /// Equal-sample mode: mutations per pixel instead of `time`.
+    spp: Option<u32>,
     seeds: u64,
     size: u32,
     out: PathBuf,
@@ -43,7 +46,7 @@ struct Options {
 
 fn usage(msg: &str) -> ! {
     eprintln!(
-        "{msg}\nusage: langevin [--time SECONDS] [--seeds N] [--size PIXELS] [--out DIR] [scene ...]"
+        "{msg}\nusage: langevin [--time SECONDS | --spp N] [--seeds N] [--size PIXELS] [--out DIR] [scene ...]"
     );
     std::process::exit(2)
 }
@@ -51,6 +54,7 @@ fn usage(msg: &str) -> ! {
 fn parse_options() -> Options {
     let mut o = Options {
         time: 3.0,
+        spp: None,
         seeds: 5,
         size: 64,
         out: PathBuf::from("target/langevin"),
@@ -83,6 +87,15 @@ fn parse_options() -> Options {
                     .ok()
                     .filter(|n| (8..=1024).contains(n))
                     .unwrap_or_else(|| usage("--size needs a number in 8..=1024"))
+            }
+            "--spp" => {
+                o.spp = Some(
+                    value("--spp")
+                        .parse()
+                        .ok()
+                        .filter(|n| (1..=1_000_000).contains(n))
+                        .unwrap_or_else(|| usage("--spp needs mutations per pixel in 1..=1000000")),
+                )
             }
             "--out" => o.out = PathBuf::from(value("--out")),
             s if s.starts_with('-') => usage(&format!("unknown option {s}")),
@@ -225,7 +238,10 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
     };
     let dir = o.out.join(name);
     let _ = std::fs::create_dir_all(&dir);
-    let budget = Budget::Time(Duration::from_secs_f64(o.time));
+    let budget = match o.spp {
+        Some(n) => Budget::SamplesPerPixel(n),
+        None => Budget::Time(Duration::from_secs_f64(o.time)),
+    };
     let mut runs: Vec<Vec<Run>> = METHODS.iter().map(|_| Vec::new()).collect();
     for seed in 0..o.seeds {
         for (m, (label, stem, ..)) in METHODS.iter().enumerate() {
@@ -277,9 +293,12 @@ fn main() {
     if let Err(e) = std::fs::create_dir_all(&o.out) {
         usage(&format!("cannot create {}: {e}", o.out.display()));
     }
+    let budget = match o.spp {
+        Some(n) => format!("equal samples: {n} mutations per pixel"),
+        None => format!("equal time: {} s per render (bootstrap included)", o.time),
+    };
     let mut md = format!(
-        "# Langevin MLT, equal time\n\n{} s per render (bootstrap included), {} seeds, {}x{} pixels, max depth 5, large-step probability 0.3, {} threads.\n",
-        o.time,
+        "# Langevin MLT\n\n{budget}, {} seeds, {}x{} pixels, max depth 5, large-step probability 0.3, {} threads.\n",
         o.seeds,
         o.size,
         o.size,
