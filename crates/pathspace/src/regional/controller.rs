@@ -94,21 +94,34 @@ struct Visit {
 ///
 /// Each chain's controller only *records* `(region of the current state, acceptance
 /// probability)` for every step. At the end of every round of mcmc-core's render loop
-/// ([`SharedController`]), the records of all chains are applied **in job and chain order**
-/// to one pooled set of Alg. 1 statistics `(i_k, A_k, n_k)` and scales `lambda_k`
-/// ([`PooledRegionalStats`]); then, at that synchronisation point, a due quadtree refinement
-/// runs ([`SharedController::end_round`]), and every chain receives the new scales (an
+/// ([`SharedController`]), the records of all chains are added **in job and chain order** to
+/// one pooled set of Alg. 1 statistics `(i_k, A_k, n_k)` ([`PooledRegionalStats`]); then, at
+/// that synchronisation point ([`SharedController::end_round`]), the due `lambda_k` updates
+/// and a due quadtree refinement run, and every chain receives the new scales (an
 /// [`std::sync::Arc`], no copy per chain). The paper shares the same statistics through
 /// atomics and a lock per update instead, whose result depends on thread timing.
 ///
 /// # Alg. 1 as implemented
-/// Per region `k`, for each perturbation proposal from `k`: `A_k += alpha`, `i_k += 1`; when
-/// `i_k = L`: `lambda_k += gamma_{n_k} sgn(A_k / i_k - alpha*)` (eq. 5: low acceptance
-/// *shrinks* `lambda`; the prose's opposite reading is wrong), `gamma_n = min(gamma_max,
-/// gamma_scale n^{-1/2})` (eq. 6; Alg. 1 line 15 is garbled), `lambda >= lambda_min`, then
-/// `i_k = A_k = 0`, `n_k += 1`. The update fires after `L` visits and divides by the visits
-/// counted (Alg. 1's `i_k > L` would sum `L + 1` values and divide by `L`). This is
-/// mcmc-core's [`AdaptState::record`].
+/// Per region `k`, for each perturbation proposal from `k`: `A_k += alpha`, `i_k += 1`. At a
+/// synchronisation point, every region with `i_k >= L` updates once:
+/// `lambda_k += gamma_{n_k} sgn(A_k / i_k - alpha*)` (eq. 5: low acceptance *shrinks*
+/// `lambda`; the prose's opposite reading is wrong), `gamma_n = min(gamma_max, gamma_scale
+/// n^{-1/2})` (eq. 6; Alg. 1 line 15 is garbled), `lambda >= lambda_min`, then `i_k = A_k =
+/// 0`, `n_k += 1`. The estimate divides by the visits counted (Alg. 1's `i_k > L` would sum
+/// `L + 1` values and divide by `L`).
+///
+/// # Staleness, and why one update per region per round
+/// Within a round every chain proposes with the scales published at the round's start, so
+/// all of a round's acceptances from region `k` were observed at the *same* `lambda_k`: they
+/// are one estimate of the acceptance at that scale, and the controller makes one sign step
+/// from it. (Applying a step for every `L` of them at the synchronisation point, as if they
+/// had been observed after each other, overshoots: on the two-material test scene the scales
+/// oscillated between 0.008 and 7 rad.) The price is speed: `n_k` counts synchronisation
+/// points, not blocks of `L` visits, so scales settle after a few hundred rounds (`gamma_n`
+/// reaches 0.3 after 250 updates); choose the render loop's `round_mutations` so that rounds
+/// are frequent but regions still collect `L` visits per round or two. A round costs
+/// O(visits + updated regions), not O(regions). A refinement likewise happens at the first
+/// synchronisation point after the `M_refine`-th mutation.
 ///
 /// # Refinement (section 6.2)
 /// At the first synchronisation point after every `M_refine` mutations (all chains): every
@@ -117,15 +130,6 @@ struct Visit {
 /// in the same pass); children inherit `lambda` and get `n = max(1, n_parent / 4)`,
 /// `i = A = 0`; then all visit counters restart at 0 (our reading: the paper leaves it open,
 /// practical path guiding resets per pass).
-///
-/// # Staleness
-/// Within a round a chain proposes with the scales published at the round's start, and its
-/// acceptance statistics drive updates only at the round's end. With `R` mutations per chain
-/// per round, a region's `lambda` lags by up to one round: at most `V_k / L` updates (with
-/// `V_k` the round's visits to `k`, all chains) are applied at once, each computed from
-/// acceptances observed at the old scale. The paper's atomics have a smaller lag (one
-/// update), in arbitrary order. A refinement likewise happens up to one round after the
-/// `M_refine`-th mutation. Neither affects validity (below), only how fast scales settle.
 ///
 /// # Validity
 /// Between synchronisation points every chain runs a fixed Metropolis-Hastings kernel whose
@@ -245,6 +249,11 @@ pub struct PooledRegionalStats<P> {
     splits: u64,
     rounds: u64,
     frozen: bool,
+    /// `L` (copied from the parameters).
+    updates_every: u64,
+    /// Regions whose visit count reached `L` this round (updated at the synchronisation
+    /// point, so a round costs O(visited regions), not O(regions)).
+    due: Vec<u32>,
 }
 
 impl<P> Default for PooledRegionalStats<P> {
@@ -259,6 +268,8 @@ impl<P> Default for PooledRegionalStats<P> {
             splits: 0,
             rounds: 0,
             frozen: false,
+            updates_every: u64::MAX,
+            due: Vec::new(),
         }
     }
 }
@@ -324,48 +335,80 @@ impl<P: Partition<Path> + Clone> PooledRegionalStats<P> {
         self.sigmas = Some(sigmas.clone());
         self.params = Some(params);
         self.next_refine = params.refine_every;
+        self.updates_every = params.adapt.updates_every;
         self.frozen = params.freeze_after_mutations == Some(0);
     }
 
-    /// Applies one chain's visits of the round, in order (Alg. 1 lines 11-18).
+    /// Adds one chain's visits of the round, in order (Alg. 1 lines 11-12).
     fn apply(&mut self, visits: &[Visit], steps: u64) {
         self.mutations += steps;
-        let (Some(sigmas), Some(params)) = (self.sigmas.as_mut(), self.params) else {
-            return;
-        };
-        if self.frozen || visits.is_empty() {
+        if self.sigmas.is_none() || self.frozen {
             return;
         }
-        let scales = sigmas.make_mut();
         for v in visits {
             let k = v.region as usize;
             let Some(state) = self.regions.get_mut(k) else {
-                debug_assert!(false, "visit to region {k} of {}", scales.num_regions());
+                debug_assert!(false, "visit to region {k} of {}", self.regions.len());
                 continue;
             };
             state.visits_since_refine += 1;
             if v.perturbed {
-                if let Some(lambda) =
-                    state
-                        .adapt
-                        .record(v.accept, scales.lambdas()[k], &params.adapt)
-                {
-                    scales.set_lambda(k, lambda);
+                state.adapt.visits += 1;
+                state.adapt.accepted += v.accept;
+                if state.adapt.visits == self.updates_every {
+                    self.due.push(v.region);
                 }
             }
         }
+    }
+
+    /// Alg. 1 lines 13-18 at the synchronisation point, once per region that has at least `L`
+    /// visits: `lambda_k += gamma_{n_k} sgn(A_k / i_k - alpha*)` (eq. 5, 6), clamped to
+    /// `lambda_min`; `i_k = A_k = 0`, `n_k += 1`.
+    fn update_scales(&mut self) {
+        let (Some(sigmas), Some(params)) = (self.sigmas.as_mut(), self.params) else {
+            return;
+        };
+        let p = &params.adapt;
+        if self.due.is_empty() {
+            return;
+        }
+        let scales = sigmas.make_mut();
+        // Regions are independent: the order of `due` does not matter.
+        for &k in &self.due {
+            let k = k as usize;
+            let a = &mut self.regions[k].adapt;
+            let rate = a.accepted / a.visits as f64;
+            let sign = if rate > p.target_acceptance {
+                1.0
+            } else if rate < p.target_acceptance {
+                -1.0
+            } else {
+                0.0
+            };
+            let lambda = (scales.lambdas()[k] + p.gamma(a.updates) * sign).max(p.lambda_min);
+            scales.set_lambda(k, lambda);
+            a.visits = 0;
+            a.accepted = 0.0;
+            a.updates += 1;
+        }
+        self.due.clear();
     }
 
     /// The synchronisation point, after every chain contributed its round (what
     /// [`SharedController::end_round`] runs): freeze if due, else refine if due (section 6.2).
     pub fn end_round(&mut self) {
         self.rounds += 1;
-        let (Some(sigmas), Some(params)) = (self.sigmas.as_mut(), self.params) else {
+        let (true, Some(params)) = (self.sigmas.is_some(), self.params) else {
             return;
         };
         if self.frozen {
             return;
         }
+        self.update_scales();
+        let Some(sigmas) = self.sigmas.as_mut() else {
+            return;
+        };
         if params
             .freeze_after_mutations
             .is_some_and(|f| self.mutations >= f)
