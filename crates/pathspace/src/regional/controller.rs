@@ -55,6 +55,27 @@ impl RegionalAdaptParams {
         }
     }
 
+    /// The paper's parameters with `M_refine` and `M_split` scaled to a render of
+    /// `total_mutations` (over all chains): the paper's `M_refine = 10^7` and `M_split = 5000`
+    /// are tuned for about 10^9-10^10 mutations (10 minutes on 32 threads); we keep about 100
+    /// refinement passes per render, `M_refine = max(total / 100, 1000)`, and the paper's
+    /// ratio `M_split / M_refine = 5 * 10^-4` (a leaf splits once it gets 1/2000 of a pass's
+    /// visits), with `M_split >= 4 L` so that every child can still be updated. Our choice: the
+    /// paper gives no rule.
+    #[must_use]
+    pub const fn otsu2018_for_budget(total_mutations: u64) -> Self {
+        let p = Self::otsu2018();
+        let refine = total_mutations / 100;
+        let refine = if refine < 1000 { 1000 } else { refine };
+        let split = refine / 2000;
+        let min_split = 4 * p.adapt.updates_every;
+        Self {
+            split_after_visits: Some(if split < min_split { min_split } else { split }),
+            refine_every: refine,
+            ..p
+        }
+    }
+
     /// Checks every field's range.
     ///
     /// # Errors
@@ -486,5 +507,26 @@ where
 
     fn end_round(pooled: &mut Self::Shared) {
         pooled.end_round();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budget_scaling_keeps_the_papers_ratio() {
+        let p = RegionalAdaptParams::otsu2018_for_budget(1_000_000_000);
+        assert_eq!(p.refine_every, 10_000_000);
+        assert_eq!(p.split_after_visits, Some(5000));
+        let small = RegionalAdaptParams::otsu2018_for_budget(10_000);
+        assert_eq!(small.refine_every, 1000);
+        assert_eq!(small.split_after_visits, Some(40));
+        assert!(small.validate().is_ok());
+        let bad = RegionalAdaptParams {
+            refine_every: 0,
+            ..RegionalAdaptParams::otsu2018()
+        };
+        assert!(SharedRegionalAdaptation::new(bad).is_err());
     }
 }
