@@ -35,6 +35,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use mcmc_core::delayed_rejection::IndependentSecondStage;
+use mcmc_core::render_loop::ChainSlot;
 use mcmc_core::seed::chain_seed;
 use mcmc_core::stats::{integrated_autocorrelation_time, AcceptanceStats};
 use mcmc_core::toy::{ToyTarget, UniformMixture};
@@ -46,7 +47,8 @@ use render::bdpt::BdptParams;
 use render::image::Image;
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::{
-    render_mlt, LargeStepMode, MltBudget, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS,
+    render_mlt, LargeStepMode, MltBudget, MltSettings, MmltTarget, PerChain, PssmltTarget,
+    PATH_STREAMS,
 };
 use render::scene::Scene;
 use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
@@ -331,7 +333,9 @@ where
         DrVariant::Orbital => {
             render_mlt(
                 targets,
-                |p| dr::orbital_kernel(layout, base, p),
+                PerChain(|slot: ChainSlot, p| {
+                    dr::orbital_kernel(layout, base, p, slot.target as u32)
+                }),
                 settings,
                 &NoProgress,
                 &no,
@@ -341,7 +345,9 @@ where
         DrVariant::TierneyMira => {
             render_mlt(
                 targets,
-                |p| dr::tierney_mira_kernel(layout, base, p),
+                PerChain(|slot: ChainSlot, p| {
+                    dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
+                }),
                 settings,
                 &NoProgress,
                 &no,
@@ -351,7 +357,9 @@ where
         DrVariant::GreenMira => {
             render_mlt(
                 targets,
-                |p| dr::green_mira_kernel(layout, base, p),
+                PerChain(|slot: ChainSlot, p| {
+                    dr::green_mira_kernel(layout, base, p, slot.target as u32)
+                }),
                 settings,
                 &NoProgress,
                 &no,

@@ -19,6 +19,7 @@ use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 
 use crate::mlt::dr::{self, DrBase, DrVariant};
 use crate::mlt::mala::{self, MalaConfig};
+use mcmc_core::render_loop::ChainSlot;
 
 /// Which integrator renders the image: defined with the integrator table.
 pub use crate::integrator::IntegratorKind;
@@ -534,21 +535,27 @@ where
     match variant {
         DrVariant::Orbital => mlt::render_mlt(
             targets,
-            |p| dr::orbital_kernel(layout, base, p),
+            mlt::PerChain(|slot: ChainSlot, p| {
+                dr::orbital_kernel(layout, base, p, slot.target as u32)
+            }),
             mlt_settings,
             progress,
             cancel,
         ),
         DrVariant::TierneyMira => mlt::render_mlt(
             targets,
-            |p| dr::tierney_mira_kernel(layout, base, p),
+            mlt::PerChain(|slot: ChainSlot, p| {
+                dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
+            }),
             mlt_settings,
             progress,
             cancel,
         ),
         DrVariant::GreenMira => mlt::render_mlt(
             targets,
-            |p| dr::green_mira_kernel(layout, base, p),
+            mlt::PerChain(|slot: ChainSlot, p| {
+                dr::green_mira_kernel(layout, base, p, slot.target as u32)
+            }),
             mlt_settings,
             progress,
             cancel,

@@ -44,6 +44,7 @@ use common::stats::{
 };
 use common::{analytic_enclosure, enclosure_radiance, ENCLOSURE_ALBEDO, ENCLOSURE_LE};
 use glam::{Mat4, Vec3, Vec3A};
+use mcmc_core::render_loop::ChainSlot;
 use mcmc_core::{Mh, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::{render_bdpt, BdptParams};
@@ -52,8 +53,8 @@ use render::metrics::{relmse, RELMSE_EPSILON};
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::mala::{self, MalaConfig, MalaVariant};
 use render::mlt::{
-    render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget, PssmltTarget,
-    PATH_STREAMS,
+    render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget, PerChain,
+    PssmltTarget, PATH_STREAMS,
 };
 use render::scene::{CameraSpec, Material, Mesh, Scene};
 use render::session::NoProgress;
@@ -165,21 +166,21 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             match variant {
                 DrVariant::Orbital => render_mlt(
                     &targets,
-                    |p| dr::orbital_kernel(layout, base, p),
+                    |p| dr::orbital_kernel(layout, base, p, 0),
                     settings,
                     &NoProgress,
                     &cancel,
                 ),
                 DrVariant::TierneyMira => render_mlt(
                     &targets,
-                    |p| dr::tierney_mira_kernel(layout, base, p),
+                    |p| dr::tierney_mira_kernel(layout, base, p, 0),
                     settings,
                     &NoProgress,
                     &cancel,
                 ),
                 DrVariant::GreenMira => render_mlt(
                     &targets,
-                    |p| dr::green_mira_kernel(layout, base, p),
+                    |p| dr::green_mira_kernel(layout, base, p, 0),
                     settings,
                     &NoProgress,
                     &cancel,
@@ -214,7 +215,9 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             let layout = dr::dr_layout(params.max_depth);
             render_mlt(
                 &MmltTarget::all_depths(scene, params, w, h),
-                |p| dr::orbital_kernel(layout, DrBase::Mmlt, p),
+                PerChain(|slot: ChainSlot, p| {
+                    dr::orbital_kernel(layout, DrBase::Mmlt, p, slot.target as u32)
+                }),
                 settings,
                 &NoProgress,
                 &cancel,

@@ -14,19 +14,27 @@
 //!
 //! On MMLT (`DrBase::Mmlt`, section 5.1.2) the second stage moves only the camera stream:
 //! the light subpath and the strategy choice (the first number of the connection stream) stay
-//! fixed. For light-tracing strategies (t = 1) the camera stream only holds the raster
-//! position, which the connection overrides, so their second stage proposes the same path
-//! (accepted; a wasted evaluation, documented rather than special-cased).
+//! fixed. Light-tracing strategies (t = 1, "Handling Light Tracing" in section 5.1.2) are the
+//! exception: their camera stream holds only the raster position, which the connection
+//! overrides, so their second stage moves the camera *and* light streams ([`ByStrategy`],
+//! which reads the strategy of the current state; the second stage never moves the strategy
+//! coordinate, so the reverse path sees the same strategy and the choice is symmetric).
+//!
+//! Our reading where the paper fixes the MMLT strategy along the whole chain: the bold first
+//! stage here moves every stream's layout, strategy coordinate included, so a first-stage
+//! candidate may change strategy (an exact move of the MMLT target; it is then judged by the
+//! usual acceptance). Only the second stage keeps the strategy.
 //!
 //! The pairwise stages move a fixed layout of coordinates per stream, sized from the maximum
 //! path depth to cover what BDPT reads ([`dr_layout`]); coordinates beyond it are renewed by
 //! large steps only (exact, see [`pss::OnLayout`]).
 
 use mcmc_core::delayed_rejection::IndependentSecondStage;
-use mcmc_core::DelayedRejection;
+use mcmc_core::proposal::ConditionalProposal;
+use mcmc_core::{DelayedRejection, Proposed};
 use pss::{
     LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseKelemenParams,
-    PairwiseMltProposal, WrappedCauchy,
+    PairwiseMltProposal, PssState, WrappedCauchy,
 };
 
 use super::PATH_STREAMS;
@@ -141,53 +149,133 @@ pub fn second_stage_streams(base: DrBase) -> u8 {
     }
 }
 
-/// The orbital kernel.
+/// Streams the second stage moves for MMLT's light-tracing strategies (t = 1): camera and
+/// light.
+#[must_use]
+pub fn light_tracing_streams() -> u8 {
+    (1 << Stream::Camera.index()) | (1 << Stream::Light.index())
+}
+
+/// The light-tracing test of MMLT's strategy choice: true if the state `x` of an MMLT target
+/// of depth `depth` samples a strategy with `t = 1`. It reads the first number of the
+/// connection stream as `crate::bdpt::sample_strategy` does (`s = floor(u n)`, `n = depth + 2`,
+/// in f32), from the stored value (up to date: the current state's evaluation read it).
+#[must_use]
+pub fn is_light_tracing(x: &PssState, depth: u32) -> bool {
+    if depth == 0 {
+        return false;
+    }
+    let Some(&u) = x.raw_values().get(Stream::Connection.index()) else {
+        return false;
+    };
+    let n = depth as usize + 2;
+    let u = (u as f32).min(1.0 - f32::EPSILON / 2.0);
+    let s = ((u * n as f32) as usize).min(n - 1);
+    n - s == 1
+}
+
+/// A second stage that depends on the MMLT strategy of the current state (DR paper section
+/// 5.1.2, "Handling Light Tracing"): `light_tracing` for `t = 1` states of an MMLT target of
+/// depth `depth`, `normal` otherwise (and always `normal` without a depth: PSSMLT). The
+/// strategy coordinate is outside both stages' streams, so `z` and the ghost keep `x`'s
+/// strategy and the reverse path makes the same choice.
+#[derive(Clone, Copy, Debug)]
+pub struct ByStrategy<P> {
+    /// The MMLT depth of the chain's target, or `None` (PSSMLT: one stage).
+    pub depth: Option<u32>,
+    /// The stage of every other state.
+    pub normal: P,
+    /// The stage of light-tracing states.
+    pub light_tracing: P,
+}
+
+impl<P> ByStrategy<P> {
+    fn pick(&self, x: &PssState) -> &P {
+        match self.depth {
+            Some(d) if is_light_tracing(x, d) => &self.light_tracing,
+            _ => &self.normal,
+        }
+    }
+}
+
+impl<P: ConditionalProposal<PssState>> ConditionalProposal<PssState> for ByStrategy<P> {
+    fn propose<R: rand::Rng + ?Sized>(
+        &self,
+        x: &PssState,
+        y: &PssState,
+        z: &mut PssState,
+        rng: &mut R,
+    ) -> Proposed {
+        self.pick(x).propose(x, y, z, rng)
+    }
+    fn log_q(&self, x: &PssState, y: &PssState, z: &PssState) -> f64 {
+        self.pick(x).log_q(x, y, z)
+    }
+}
+
+/// The strategy-aware second stage made by `stage(stream_mask)` for `base` and `depth`.
+fn by_strategy<P>(base: DrBase, depth: u32, stage: impl Fn(u8) -> P) -> ByStrategy<P> {
+    ByStrategy {
+        depth: (base == DrBase::Mmlt).then_some(depth),
+        normal: stage(second_stage_streams(base)),
+        light_tracing: stage(light_tracing_streams()),
+    }
+}
+
+/// The orbital kernel (`depth`: the MMLT depth of the chain's target; ignored on PSSMLT).
 #[must_use]
 pub fn orbital_kernel(
     layout: PairLayout,
     base: DrBase,
     p_large: f64,
-) -> DelayedRejection<PairwiseMltProposal, OnLayout<Orbital>> {
-    let second = OnLayout::new(
-        Orbital {
-            angle: WrappedCauchy::default(),
-        },
-        layout,
-    )
-    .with_stream_mask(second_stage_streams(base));
+    depth: u32,
+) -> DelayedRejection<PairwiseMltProposal, ByStrategy<OnLayout<Orbital>>> {
+    let second = by_strategy(base, depth, |mask| {
+        OnLayout::new(
+            Orbital {
+                angle: WrappedCauchy::default(),
+            },
+            layout,
+        )
+        .with_stream_mask(mask)
+    });
     DelayedRejection::orbital(first_stage(layout, p_large), second).second_stage_after_small_steps()
 }
 
-/// The Tierney-Mira kernel.
+/// The Tierney-Mira kernel (`depth` as [`orbital_kernel`]).
 #[must_use]
 pub fn tierney_mira_kernel(
     layout: PairLayout,
     base: DrBase,
     p_large: f64,
-) -> DelayedRejection<PairwiseMltProposal, IndependentSecondStage<OnLayout<PairwiseKelemen>>> {
+    depth: u32,
+) -> DelayedRejection<
+    PairwiseMltProposal,
+    ByStrategy<IndependentSecondStage<OnLayout<PairwiseKelemen>>>,
+> {
     DelayedRejection::tierney_mira(
         first_stage(layout, p_large),
-        timid_stage(layout, second_stage_streams(base)),
+        by_strategy(base, depth, |mask| timid_stage(layout, mask)),
     )
     .with_symmetric_second_stage()
     .second_stage_after_small_steps()
 }
 
-/// The Green-Mira kernel.
+/// The Green-Mira kernel (`depth` as [`orbital_kernel`]).
 #[must_use]
 pub fn green_mira_kernel(
     layout: PairLayout,
     base: DrBase,
     p_large: f64,
+    depth: u32,
 ) -> DelayedRejection<
     PairwiseMltProposal,
-    IndependentSecondStage<OnLayout<PairwiseKelemen>>,
+    ByStrategy<IndependentSecondStage<OnLayout<PairwiseKelemen>>>,
     LayoutGhost,
 > {
-    let streams = second_stage_streams(base);
     DelayedRejection::green_mira(
         first_stage(layout, p_large),
-        timid_stage(layout, streams),
+        by_strategy(base, depth, |mask| timid_stage(layout, mask)),
         LayoutGhost {
             layout,
             stream_mask: pss::ALL_STREAMS,

@@ -104,6 +104,31 @@ pub struct MltOutput {
     pub notes: Vec<String>,
 }
 
+/// How [`render_mlt`] makes each chain's kernel: any `Fn(p_large) -> K` (the same kernel for
+/// every chain), or [`PerChain`] for a kernel that depends on the chain's [`ChainSlot`] (e.g.
+/// on its MMLT depth).
+pub trait MakeKernel<K>: Sync {
+    /// The kernel of the chain in `slot`, with large-step probability `p_large`.
+    fn make(&self, slot: ChainSlot, p_large: f64) -> K;
+}
+
+impl<K, F: Fn(f64) -> K + Sync> MakeKernel<K> for F {
+    fn make(&self, _slot: ChainSlot, p_large: f64) -> K {
+        self(p_large)
+    }
+}
+
+/// A kernel factory that sees the chain's slot (chain index, and target index: the MMLT depth
+/// for [`super::MmltTarget::all_depths`]).
+#[derive(Clone, Copy, Debug)]
+pub struct PerChain<F>(pub F);
+
+impl<K, F: Fn(ChainSlot, f64) -> K + Sync> MakeKernel<K> for PerChain<F> {
+    fn make(&self, slot: ChainSlot, p_large: f64) -> K {
+        (self.0)(slot, p_large)
+    }
+}
+
 /// Runs an MCMC render over one or more targets (PSSMLT: one; MMLT: one per path depth)
 /// through `mcmc_core::render_loop`: bootstrap of fresh PSS points (`pss::FreshPss`), chain
 /// starts resampled in proportion to `f`, chains in 32 fixed jobs, expected-value splats, the
@@ -113,7 +138,7 @@ pub struct MltOutput {
 /// number of mutations (Kelemen et al. 2002, eq. 5 with expected values).
 pub fn render_mlt<T, K>(
     targets: &[T],
-    make_kernel: impl Fn(f64) -> K + Sync,
+    make_kernel: impl MakeKernel<K>,
     settings: &MltSettings,
     progress: &dyn Progress,
     cancel: &AtomicBool,
@@ -148,7 +173,7 @@ where
             let out = RenderLoop {
                 targets,
                 states: &states,
-                kernel: |_| make_kernel(p),
+                kernel: |slot| make_kernel.make(slot, p),
                 controller: |_| NoAdaptation,
                 sink,
             }
@@ -171,7 +196,7 @@ where
             let out = RenderLoop {
                 targets,
                 states: &states,
-                kernel: |_| make_kernel(initial),
+                kernel: |slot| make_kernel.make(slot, initial),
                 controller: |_| {
                     AutoLargeStep::pooled(total).unwrap_or_else(|_| unreachable!("total >= 1"))
                 },
