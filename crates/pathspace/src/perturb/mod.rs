@@ -210,6 +210,14 @@ impl<'a, S: PathScene + ?Sized, Sc: ScaleSource, K: DirectionKernel> Perturbatio
                 let Some(hit) = scene.intersect(origin, dir) else {
                     return false;
                 };
+                // A chain whose edge direction, recomputed from the vertices, is unchanged has
+                // transition density 0 (see `log_q_with`): with exact geometry a null event,
+                // but a scene that reports hits at finite (e.g. f32) resolution can map a tiny
+                // angle onto the same vertex. Such a candidate is rejected rather than given
+                // a 0/0 Hastings term.
+                if m == c + 1 && angle_between(old, direction(origin, hit.position)) == 0.0 {
+                    return false;
+                }
                 let specular = scene.is_specular(&hit);
                 y.vertices[m].point = hit;
                 match xv[m].specular {
