@@ -6,6 +6,7 @@ use crate::error::LqmcError;
 use crate::lattice::Rank1Lattice;
 use crate::shift::ShiftedLattice;
 use crate::tiling::Tiling;
+use crate::torus::{torus_difference, wrap_unit};
 
 /// What a [`LocalIntegrand`] reports for the path rebuilt from a perturbed prefix `u_bar_j`.
 ///
@@ -126,6 +127,17 @@ pub struct Splat<P> {
     pub weight: f64,
     /// `weight * contribution` (eq. 9 with the breakup probability).
     pub value: f64,
+}
+
+/// Reusable buffers of [`LocalQmc::explore_with`] (the seed's tile, its tile coordinates,
+/// the shift, and one member's coordinates).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ExploreScratch {
+    tile: Vec<u32>,
+    t: Vec<f64>,
+    shift: Vec<f64>,
+    u_j: Vec<f64>,
+    t_j: Vec<f64>,
 }
 
 /// Counts from one [`LocalQmc::explore`].
@@ -326,16 +338,58 @@ impl LocalQmc {
         integrand: &mut I,
         splats: &mut Vec<Splat<I::Payload>>,
     ) -> Exploration {
-        let set = self.locate(u_bar);
-        let seed_index = set.seed_index();
+        self.explore_with(
+            u_bar,
+            seed,
+            integrand,
+            splats,
+            &mut ExploreScratch::default(),
+        )
+    }
+
+    /// [`LocalQmc::explore`] with caller-owned buffers: once `scratch` has grown to the
+    /// lattice's dimension, exploring allocates nothing (a renderer explores millions of
+    /// seeds). The result is identical.
+    pub fn explore_with<I: LocalIntegrand>(
+        &self,
+        u_bar: &[f64],
+        seed: Rebuilt<I::Payload>,
+        integrand: &mut I,
+        splats: &mut Vec<Splat<I::Payload>>,
+        scratch: &mut ExploreScratch,
+    ) -> Exploration {
+        let s = self.dims();
+        assert_eq!(u_bar.len(), s, "seed and lattice dimensions differ");
+        let ExploreScratch {
+            tile,
+            t,
+            shift,
+            u_j,
+            t_j,
+        } = scratch;
+        for v in [&mut *t, &mut *shift, &mut *u_j, &mut *t_j] {
+            v.clear();
+            v.resize(s, 0.0);
+        }
+        tile.clear();
+        tile.resize(s, 0);
+        // Alg. 1 line 3 (as `locate` and `ShiftedLattice::through`, without allocating).
+        self.tiling.to_tile(u_bar, tile, t);
+        let closest = self.lattice.closest_point(t);
+        let seed_index = closest.index;
+        for ((d, &x), &r) in shift
+            .iter_mut()
+            .zip(t.iter())
+            .zip(self.lattice.point(seed_index))
+        {
+            *d = torus_difference(x, r);
+        }
         let start = splats.len();
         let mut stats = Exploration {
             seed_index,
             members: 0,
             rejected: 0,
         };
-        let mut u_j = vec![0.0; self.dims()];
-        let mut t_j = vec![0.0; self.dims()];
         let mut seed = Some(seed);
         // First pass (lines 5-13): rebuild, keep P/J in `weight`, accumulate S.
         let mut sum = 0.0;
@@ -343,8 +397,12 @@ impl LocalQmc {
             let rebuilt = if j == seed_index {
                 seed.take()
             } else {
-                self.member_into(&set, j, &mut t_j, &mut u_j);
-                integrand.rebuild(&u_j)
+                // Alg. 1 line 7: T^{-1}({r_j + Delta}).
+                for ((o, &r), &d) in t_j.iter_mut().zip(self.lattice.point(j)).zip(shift.iter()) {
+                    *o = wrap_unit(r + d);
+                }
+                self.tiling.invert(tile, t_j, u_j);
+                integrand.rebuild(u_j)
             };
             let Some(r) =
                 rebuilt.filter(|r| r.prefix_jacobian.is_finite() && r.prefix_jacobian > 0.0)
@@ -482,6 +540,38 @@ mod tests {
         assert!(splats.is_empty());
     }
 
+    /// One scratch reused across sets of different dimensions gives the splats of a fresh
+    /// `explore` (negative control: a different seed gives different splats).
+    #[test]
+    fn reused_scratch_gives_the_same_splats() {
+        let mut scratch = ExploreScratch::default();
+        for (n, tiles, seed) in [
+            (23, vec![3, 5, 2], vec![0.91, 0.12, 0.5]),
+            (7, vec![2], vec![0.33]),
+            (97, vec![4, 1, 6, 2, 9], vec![0.2, 0.4, 0.6, 0.8, 0.99]),
+        ] {
+            let l = Rank1Lattice::from_table(n, tiles.len()).unwrap();
+            let jitter: Vec<f64> = (0..tiles.len()).map(|d| 0.1 * d as f64).collect();
+            let q = LocalQmc::new(l, Tiling::new(tiles).unwrap().with_jitter(&jitter).unwrap())
+                .unwrap();
+            let mut integrand = |u: &[f64]| Some(uniform(u));
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            let sa = q.explore(&seed, uniform(&seed), &mut integrand, &mut a);
+            let sb = q.explore_with(&seed, uniform(&seed), &mut integrand, &mut b, &mut scratch);
+            assert_eq!((sa, &a), (sb, &b));
+            let other: Vec<f64> = seed.iter().map(|x| (x + 0.37) % 1.0).collect();
+            let mut c = Vec::new();
+            let _ = q.explore_with(
+                &other,
+                uniform(&other),
+                &mut integrand,
+                &mut c,
+                &mut scratch,
+            );
+            assert_ne!(a, c);
+        }
+    }
+
     #[test]
     fn public_types_are_send_and_sync() {
         fn check<T: Send + Sync>() {}
@@ -489,6 +579,7 @@ mod tests {
         check::<LocalSet>();
         check::<Splat<()>>();
         check::<Rebuilt<()>>();
+        check::<ExploreScratch>();
         check::<crate::Halton>();
         check::<crate::KorobovSpace>();
     }

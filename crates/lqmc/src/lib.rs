@@ -14,7 +14,7 @@
 //! | [`KorobovSpace`] (`P_alpha`, CBC), embedded tables ([`Rank1Lattice::from_table`]) | section 3.4, \[NC06\] |
 //! | [`ShiftedLattice`] | eq. 3, Cranley-Patterson shift, Fig. 3 |
 //! | [`Tiling`] | eq. 12, jittered tiling of section 3.4 |
-//! | [`LocalQmc`], [`LocalIntegrand`], [`Rebuilt`], [`Splat`] | Alg. 1, eq. 8-9 |
+//! | [`LocalQmc`], [`LocalIntegrand`], [`Rebuilt`], [`Splat`], [`ExploreScratch`] | Alg. 1, eq. 8-9 |
 //! | [`sample_breakup`], [`breakup_probability`] | breakup point, section 3.3 |
 //!
 //! # Example
@@ -67,7 +67,9 @@ mod torus;
 pub use breakup::{breakup_probability, sample_breakup};
 pub use cbc::{table_source, KorobovSpace, TABLE_WEIGHT_DECAY, TABLE_WEIGHT_SCALE};
 pub use error::LqmcError;
-pub use estimator::{Exploration, LocalIntegrand, LocalQmc, LocalSet, Rebuilt, Splat};
+pub use estimator::{
+    Exploration, ExploreScratch, LocalIntegrand, LocalQmc, LocalSet, Rebuilt, Splat,
+};
 pub use halton::{
     faure_permutation, radical_inverse, Halton, Scrambling, HALTON_DIMENSIONS, HALTON_PRIMES,
     ONE_MINUS_EPSILON,

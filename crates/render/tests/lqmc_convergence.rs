@@ -16,7 +16,8 @@
 //! with `min(R, K) - 1` degrees of freedom (conservative), against a closed form
 //! `T = (m - mu) / (s / sqrt(R))`. All comparisons share the family-wise false-alarm
 //! probability `ALPHA_FAMILY` (Bonferroni over `N_COMPARISONS`), with Student-t critical
-//! values from the exact distribution function (Abramowitz & Stegun 26.7.3-4).
+//! values from the exact distribution function (Abramowitz & Stegun 26.7.3-4;
+//! `common::stats`).
 
 mod common;
 
@@ -24,6 +25,7 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
+use common::stats::{assert_finite_non_negative, block_means, mean_se, t_critical};
 use common::{analytic_enclosure, enclosure_radiance};
 use render::bdpt::{render_bdpt, BdptParams};
 use render::budget::Budget;
@@ -44,54 +46,9 @@ const BLOCKS: usize = 4;
 /// glass Cornell box and depth-of-field scene, image mean and blocks (the same three).
 const N_COMPARISONS: usize = 3 + 3 * 3 * (1 + BLOCKS * BLOCKS);
 
-/// `P(|T| >= t)` for Student's t, exact for integer `df`.
-fn t_two_sided_p(t: f64, df: u32) -> f64 {
-    let theta = (t.abs() / f64::from(df).sqrt()).atan();
-    let (s, c) = theta.sin_cos();
-    let c2 = c * c;
-    let a = if df % 2 == 1 {
-        let mut sum = 0.0;
-        if df > 1 {
-            let mut term = c;
-            sum = term;
-            for k in 1..=(df - 3) / 2 {
-                term *= c2 * f64::from(2 * k) / f64::from(2 * k + 1);
-                sum += term;
-            }
-        }
-        2.0 / std::f64::consts::PI * (theta + s * sum)
-    } else {
-        let mut term = 1.0;
-        let mut sum = 1.0;
-        for k in 1..=(df - 2) / 2 {
-            term *= c2 * f64::from(2 * k - 1) / f64::from(2 * k);
-            sum += term;
-        }
-        s * sum
-    };
-    (1.0 - a).clamp(0.0, 1.0)
-}
-
 /// The Bonferroni-corrected two-sided critical value for `R - 1` degrees of freedom.
 fn critical() -> f64 {
-    let alpha = ALPHA_FAMILY / N_COMPARISONS as f64;
-    let (mut lo, mut hi) = (0.0f64, 1e4f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if t_two_sided_p(mid, (R - 1) as u32) > alpha {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
-fn mean_se(xs: &[f64]) -> (f64, f64) {
-    let n = xs.len() as f64;
-    let m = xs.iter().sum::<f64>() / n;
-    let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
+    t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R - 1) as u32)
 }
 
 /// LQMC exploring every contribution, NEE included (the authors' code's `N = 7` for NEE):
@@ -141,10 +98,7 @@ fn replicates(method: Method, scene: &Scene, spp: u32, max_depth: u32, seed0: u6
                     out.image
                 }
             };
-            assert!(image
-                .pixels
-                .iter()
-                .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
+            assert_finite_non_negative(&image, name(method));
             image
         })
         .collect()
@@ -152,23 +106,9 @@ fn replicates(method: Method, scene: &Scene, spp: u32, max_depth: u32, seed0: u6
 
 /// Image mean luminance, then the `BLOCKS x BLOCKS` block means.
 fn statistics(image: &Image) -> Vec<f64> {
-    let (w, h) = (image.width, image.height);
-    let mut sums = [0.0f64; 1 + BLOCKS * BLOCKS];
-    let mut counts = [0usize; 1 + BLOCKS * BLOCKS];
-    for y in 0..h {
-        for x in 0..w {
-            let l = f64::from(image.luminance(x, y));
-            let k = 1 + (y * BLOCKS / h) * BLOCKS + x * BLOCKS / w;
-            sums[0] += l;
-            counts[0] += 1;
-            sums[k] += l;
-            counts[k] += 1;
-        }
-    }
-    sums.iter()
-        .zip(&counts)
-        .map(|(s, &c)| s / c as f64)
-        .collect()
+    let blocks = block_means(image, BLOCKS);
+    let mean = blocks.iter().sum::<f64>() / blocks.len() as f64;
+    std::iter::once(mean).chain(blocks).collect()
 }
 
 /// The largest `|T|` over the statistics of `images` against `reference`.

@@ -4,7 +4,9 @@
 //! `z_{b+1}`, and weight by eq. 8-9 with the breakup probability.
 
 use glam::{UVec2, Vec2, Vec3};
-use lqmc::{sample_breakup, LocalIntegrand, LocalQmc, Rank1Lattice, Rebuilt, Splat, Tiling};
+use lqmc::{
+    sample_breakup, ExploreScratch, LocalIntegrand, LocalQmc, Rank1Lattice, Rebuilt, Splat, Tiling,
+};
 use mcmc_core::seed::mix64;
 
 use super::class::{
@@ -69,6 +71,7 @@ pub(crate) struct Explorer<'a> {
     seed_numbers: Vec<f32>,
     overrides: Vec<(usize, f32)>,
     splats: Vec<Splat<(Vec2, Vec3)>>,
+    scratch: ExploreScratch,
     /// `(N, tiles, set)` of the current progression.
     sets: Vec<(u32, Vec<u32>, LocalQmc)>,
     progression: u32,
@@ -103,6 +106,7 @@ impl<'a> Explorer<'a> {
             seed_numbers: Vec::new(),
             overrides: Vec::new(),
             splats: Vec::new(),
+            scratch: ExploreScratch::default(),
             sets: Vec::new(),
             progression: u32::MAX,
             stats: ExploreStats::default(),
@@ -251,7 +255,13 @@ impl<'a> Explorer<'a> {
         };
         self.splats.clear();
         let lqmc = &self.sets[set_index].2;
-        let stats = lqmc.explore(&self.u_seed, seed_rebuilt, &mut member, &mut self.splats);
+        let stats = lqmc.explore_with(
+            &self.u_seed,
+            seed_rebuilt,
+            &mut member,
+            &mut self.splats,
+            &mut self.scratch,
+        );
         self.stats.explored += 1;
         self.stats.members += u64::from(stats.members);
         self.stats.rejected += u64::from(stats.rejected);
@@ -273,14 +283,15 @@ impl<'a> Explorer<'a> {
     /// The lattice set with `N = n` and the layout's tiles in this progression (built once
     /// per progression and work unit).
     fn set_for(&mut self, n: u32) -> Option<usize> {
-        let tiles: Vec<u32> = self.layout.tiles().collect();
+        let layout = &self.layout;
         if let Some(i) = self
             .sets
             .iter()
-            .position(|(m, t, _)| *m == n && *t == tiles)
+            .position(|(m, t, _)| *m == n && t.iter().copied().eq(layout.tiles()))
         {
             return Some(i);
         }
+        let tiles: Vec<u32> = self.layout.tiles().collect();
         let lattice = Rank1Lattice::from_table(n, tiles.len()).ok()?;
         let jitter: Vec<f64> = (0..tiles.len())
             .map(|d| Self::jitter(self.seed, self.progression, d))

@@ -8,7 +8,7 @@
 //! 1. trace a path with its vertices ([`crate::integrator::vertex_path`]); every contribution
 //!    (emitter hit, environment, next-event estimation; section 5 "we perform the
 //!    perturbations every time a complete path is found") is handled separately;
-//! 2. classify it ([`class`]): caustic (`N = 97`), depth of field (`N = 23`), normal
+//! 2. classify it ([`PathClass`]): caustic (`N = 97`), depth of field (`N = 23`), normal
 //!    (`N = 23`), NEE that is neither (splatted unexplored: "we are very careful not to
 //!    explore the sample"; [`LqmcParams::explore_nee`] explores it with `N = 7`, as the
 //!    authors' code does), or too short (`L < 2`, splatted directly);
