@@ -397,3 +397,31 @@ fn freeze_stops_adaptation_and_refinement() {
     );
     assert!(pooled.refinements() >= 1 && kernel.get().lambdas() != &frozen[..]);
 }
+
+/// The sigma heat map of a 4-D partition averages `lambda` over a top cell's direction leaves
+/// weighted by their area (control: the unweighted mean of the leaves differs).
+#[test]
+fn direction_heat_map_weights_leaves_by_area() {
+    let scene = AnalyticScene::test_box().unwrap();
+    let part = PathPartition::Direction(
+        DirectionPartition::new(&scene, 2, PlanePartition::quadtree(4).unwrap()).unwrap(),
+    );
+    let mut s = RegionalSigmas::new(part, 0.0, 1.0).unwrap();
+    // Cell 0: four leaves of area 1/4, then leaf 0 again into four of area 1/16.
+    let fresh = s.split(0).unwrap();
+    s.split(0).unwrap();
+    s.set_lambda(fresh.start, -4.0); // area 1/4
+    let ids_in_cell0: Vec<usize> = (0..s.num_regions())
+        .filter(|&k| match s.partition() {
+            PathPartition::Direction(p) => p.cell_of(k).0 == 0,
+            _ => unreachable!(),
+        })
+        .collect();
+    assert_eq!(ids_in_cell0.len(), 7);
+    let map = s.screen_sigma_map(2, 2);
+    let weighted = (0.5f64 * (-4.0 / 4.0)).exp();
+    assert!((map[0] - weighted).abs() < 1e-12, "{map:?}");
+    assert_eq!(&map[1..], &[1.0, 1.0, 1.0]);
+    let unweighted = (0.5f64 * (-4.0 / 7.0)).exp();
+    assert!((map[0] - unweighted).abs() > 0.1);
+}

@@ -6,11 +6,12 @@ use std::sync::Arc;
 
 use mcmc_core::{Mh, Mixture, Partition};
 
+use super::partition::PathPartition;
 use crate::combine::PathMutation;
 use crate::error::PathspaceError;
 use crate::path::Path;
 use crate::perturb::{DirectionKernel, Perturbation, ScaleSource};
-use crate::scene::PathScene;
+use crate::scene::{Camera, PathScene};
 
 /// `lambda_k = log sigma_k^2` for every region `k` of a partition, as a [`ScaleSource`]:
 /// `sigmas(x) = [sigma_k, rho sigma_k]` with `k` the region of `x` and `sigma_k = e^{lambda_k / 2}`
@@ -114,6 +115,69 @@ impl<P: Partition<Path>> RegionalSigmas<P> {
             self.lambdas[k] = parent;
         }
         Some(fresh)
+    }
+}
+
+impl<C: Camera> RegionalSigmas<PathPartition<C>> {
+    /// A heat map of the learned scale over the screen: `sigma_1` at every pixel centre of a
+    /// `width x height` raster (row-major, row 0 at raster `y = 0`). For a 4-D partition the
+    /// pixel's top cell holds many direction regions; the map shows `e^{m/2}` with `m` the
+    /// area-weighted mean of their `lambda` over `[0, 1)^2` (a geometric mean of `sigma`).
+    ///
+    /// # Example
+    /// ```
+    /// use pathspace::analytic::AnalyticScene;
+    /// use pathspace::regional::{PathPartition, PlanePartition, RegionalSigmas, ScreenPartition};
+    ///
+    /// let scene = AnalyticScene::test_box().unwrap();
+    /// let grid = ScreenPartition::new(&scene, PlanePartition::grid(2).unwrap());
+    /// let mut sigmas = RegionalSigmas::new(PathPartition::Screen(grid), 0.0, 1.0).unwrap();
+    /// sigmas.set_lambda(1, (0.25f64).ln()); // top-right cell: sigma = 0.5
+    /// let map = sigmas.screen_sigma_map(4, 2);
+    /// assert_eq!(map[0], 1.0);
+    /// assert!((map[3] - 0.5).abs() < 1e-12);
+    /// ```
+    #[must_use]
+    pub fn screen_sigma_map(&self, width: usize, height: usize) -> Vec<f64> {
+        let sigma = |lambda: f64| (0.5 * lambda).exp();
+        let centre = |i: usize, n: usize| (i as f64 + 0.5) / n as f64;
+        let mut map = Vec::with_capacity(width * height);
+        match &self.partition {
+            PathPartition::Single => map.resize(width * height, sigma(self.lambdas[0])),
+            PathPartition::Screen(p) => {
+                for y in 0..height {
+                    for x in 0..width {
+                        let k = p.plane().region([centre(x, width), centre(y, height)]);
+                        map.push(sigma(self.lambdas[k]));
+                    }
+                }
+            }
+            PathPartition::Direction(p) => {
+                let n = p.top_cells_per_axis();
+                let cell_mean: Vec<f64> = (0..n * n)
+                    .map(|c| {
+                        let screen = [centre(c % n, n), centre(c / n, n)];
+                        let leaves = p.cell_partition(c);
+                        (0..leaves.num_regions())
+                            .map(|l| {
+                                let [lo, hi] = leaves.bounds(l);
+                                let mid = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+                                let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
+                                area * self.lambdas[p.region_of_point(screen, mid)]
+                            })
+                            .sum::<f64>()
+                    })
+                    .collect();
+                for y in 0..height {
+                    for x in 0..width {
+                        let cell = |v: f64| ((v * n as f64) as usize).min(n - 1);
+                        let c = cell(centre(y, height)) * n + cell(centre(x, width));
+                        map.push(sigma(cell_mean[c]));
+                    }
+                }
+            }
+        }
+        map
     }
 }
 
