@@ -337,8 +337,10 @@ fn negative_control_immediate_lock_sharing_depends_on_threads() {
             .unwrap()
         })
     };
-    let (one, three) = (render(1), render(3));
-    let differ = bits(&one.sink) != bits(&three.sink);
+    let one = bits(&render(1).sink);
+    // Up to three tries: a 3-thread pool whose workers never get a core (a loaded machine)
+    // would run the jobs in order, like one thread.
+    let differ = (0..3).any(|_| bits(&render(3).sink) != one);
     eprintln!("immediate lock-based sharing: 1 vs 3 threads differ: {differ}");
     assert!(differ, "immediate sharing happened to be reproducible");
 }
