@@ -425,3 +425,19 @@ fn direction_heat_map_weights_leaves_by_area() {
     let unweighted = (0.5f64 * (-4.0 / 7.0)).exp();
     assert!((map[0] - unweighted).abs() > 0.1);
 }
+
+/// The public types can be shared with and sent to the render loop's threads.
+#[test]
+fn public_types_are_send_and_sync() {
+    fn send_sync<T: Send + Sync>() {}
+    type P<'a> = PathPartition<&'a AnalyticScene>;
+    send_sync::<PlanePartition>();
+    send_sync::<ScreenPartition<&AnalyticScene>>();
+    send_sync::<DirectionPartition<&AnalyticScene>>();
+    send_sync::<P<'_>>();
+    send_sync::<RegionalSigmas<P<'_>>>();
+    send_sync::<SharedSigmas<P<'_>>>();
+    send_sync::<SharedRegionalAdaptation>();
+    send_sync::<PooledRegionalStats<P<'_>>>();
+    send_sync::<RegionalAdaptParams>();
+}

@@ -13,7 +13,7 @@ use crate::path::Path;
 /// Most visits a chain's controller keeps between two synchronisation points; further visits
 /// of the round are not used for adaptation (a chain driven without a render loop never
 /// synchronises and would otherwise grow without bound).
-pub const MAX_VISITS_PER_ROUND: usize = 1 << 22;
+pub const MAX_VISITS_PER_ROUND: usize = 1 << 20;
 
 /// Parameters of shared regional adaptation.
 #[derive(Clone, Copy, Debug, PartialEq)]
