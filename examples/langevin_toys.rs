@@ -27,6 +27,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use mcmc_core::langevin::{FullOnline, Hybrid, Langevin, LangevinParams, Online, Plain};
+use mcmc_core::proposal::IndependentUniform;
 use mcmc_core::stats::effective_sample_size;
 use mcmc_core::toy::{GaussianMixture2d, Ridge, ToyTarget};
 use mcmc_core::{
@@ -38,47 +39,11 @@ use rand_pcg::Pcg64;
 use render::image::Image;
 use render::image_io::write_png;
 
-/// An independent uniform proposal on the target's box (the large step).
-#[derive(Clone, Debug)]
-struct UniformBox {
-    lo: Vec<f64>,
-    hi: Vec<f64>,
-}
-
-impl Proposal<Vec<f64>> for UniformBox {
-    fn propose<R: Rng + ?Sized>(&self, _x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut R) -> Proposed {
-        y.clear();
-        y.extend(
-            self.lo
-                .iter()
-                .zip(&self.hi)
-                .map(|(l, h)| l + (h - l) * rng.random::<f64>()),
-        );
-        Proposed::hastings(0.0)
-    }
-    fn log_q(&self, _from: &Vec<f64>, to: &Vec<f64>) -> f64 {
-        let inside = to
-            .iter()
-            .zip(self.lo.iter().zip(&self.hi))
-            .all(|(v, (l, h))| v >= l && v <= h);
-        if inside {
-            -self
-                .lo
-                .iter()
-                .zip(&self.hi)
-                .map(|(l, h)| (h - l).ln())
-                .sum::<f64>()
-        } else {
-            f64::NEG_INFINITY
-        }
-    }
-}
-
 /// A Gaussian walk or the large step: the components of the baseline's mixture.
 #[derive(Clone, Debug)]
 enum Step {
     Walk(GaussianRandomWalk),
-    Large(UniformBox),
+    Large(IndependentUniform),
 }
 
 impl Proposal<Vec<f64>> for Step {
@@ -331,7 +296,7 @@ fn main() {
         h: 1e-6,
     };
     let (lo, hi) = mix.bounding_box();
-    let large = UniformBox { lo, hi };
+    let large = IndependentUniform::new(lo, hi).expect("the mixture's box");
     let p4 = LangevinParams {
         epsilon: 0.05,
         cache_size: 2000,

@@ -20,18 +20,18 @@ use mcmc_core::langevin::{
     Adaptation, AnyAdaptation, CacheDriven, CheapThenExpensive, FullOnline, Hybrid, Langevin,
     LangevinParams, LangevinSpace, Online, Plain, ProposalGaussian,
 };
+use mcmc_core::proposal::IndependentUniform;
 use mcmc_core::testing::{
     assert_pairwise_balance, assert_path_balance, stationarity_test, PairwiseParams,
     StationarityParams,
 };
 use mcmc_core::toy::{Banana, GaussianMixture2d, Ridge, TorusMixture, ToyTarget};
 use mcmc_core::{
-    Chain, DifferentiableTarget, FiniteDifference, GaussianRandomWalk, Kernel, NoAdaptation,
-    Proposal, Proposed, Target,
+    Chain, DifferentiableTarget, FiniteDifference, GaussianRandomWalk, Kernel, NoAdaptation, Target,
 };
 use proptest::prelude::*;
 use proptest::strategy::BoxedStrategy;
-use rand::{Rng, RngExt, SeedableRng};
+use rand::SeedableRng;
 
 /// Stationarity tests in this file that must pass (Sidak correction). Keep in sync.
 const STATIONARITY_TESTS: usize = 40;
@@ -39,49 +39,10 @@ const STATIONARITY_TESTS: usize = 40;
 const STARTS: usize = 10_000;
 const STEPS: u64 = 20;
 
-/// An independent uniform proposal on a box (the large step of the toys).
-#[derive(Clone, Debug)]
-struct UniformBox {
-    lo: Vec<f64>,
-    hi: Vec<f64>,
-}
-
-impl UniformBox {
-    fn of<T: ToyTarget>(t: &T) -> Self {
-        let (lo, hi) = t.bounding_box();
-        Self { lo, hi }
-    }
-    fn log_volume(&self) -> f64 {
-        self.lo
-            .iter()
-            .zip(&self.hi)
-            .map(|(l, h)| (h - l).ln())
-            .sum()
-    }
-}
-
-impl Proposal<Vec<f64>> for UniformBox {
-    fn propose<R: Rng + ?Sized>(&self, _x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut R) -> Proposed {
-        y.clear();
-        y.extend(
-            self.lo
-                .iter()
-                .zip(&self.hi)
-                .map(|(l, h)| l + (h - l) * rng.random::<f64>()),
-        );
-        Proposed::hastings(0.0)
-    }
-    fn log_q(&self, _from: &Vec<f64>, to: &Vec<f64>) -> f64 {
-        let inside = to
-            .iter()
-            .zip(self.lo.iter().zip(&self.hi))
-            .all(|(v, (l, h))| v >= l && v <= h);
-        if inside {
-            -self.log_volume()
-        } else {
-            f64::NEG_INFINITY
-        }
-    }
+/// The large step of the toys: an independent uniform point of the target's box.
+fn uniform_box<T: ToyTarget>(t: &T) -> IndependentUniform {
+    let (lo, hi) = t.bounding_box();
+    IndependentUniform::new(lo, hi).unwrap()
 }
 
 /// A differentiable toy: the toy itself when it has an analytic gradient, else central
@@ -218,7 +179,7 @@ fn check_all_euclidean<T>(
     T: DifferentiableTarget<State = Vec<f64>>,
 {
     let p = params(epsilon);
-    let large = UniformBox::of(toy);
+    let large = uniform_box(toy);
     let fallback = GaussianRandomWalk::new(0.3).unwrap();
     let build = |a: AnyAdaptation| {
         Langevin::new(p, a, Euclidean)
@@ -320,10 +281,7 @@ fn torus_seam_every_adaptation() {
     let toy = TorusMixture::across_seam();
     let t = fd(toy.clone());
     let p = params(0.002);
-    let large = UniformBox {
-        lo: vec![0.0, 0.0],
-        hi: vec![1.0, 1.0],
-    };
+    let large = IndependentUniform::new(vec![0.0, 0.0], vec![1.0, 1.0]).unwrap();
     let variants = variants(&p, false);
     for (i, (label, a, warmup)) in variants.into_iter().enumerate() {
         let kernel = Langevin::new(p, a, Torus)
@@ -395,7 +353,7 @@ fn triples<T: ToyTarget>(toy: &T, s1: f64, s2: f64, wrap: bool) -> BoxedStrategy
 fn cheap_then_expensive_balance_and_stationarity() {
     let t = Ridge::thin();
     let p = params(0.004);
-    let large = UniformBox::of(&t);
+    let large = uniform_box(&t);
     for (i, (label, a)) in [
         ("plain", AnyAdaptation::Plain(Plain)),
         ("online (DA)", AnyAdaptation::Online(Online::new(true))),
@@ -741,7 +699,7 @@ fn splat_weights_are_unbiased() {
     use mcmc_core::testing::{toy_splat_weight_test, SplatParams};
     let t = Ridge::thin();
     let p = params(0.004);
-    let large = UniformBox::of(&t);
+    let large = uniform_box(&t);
     let mala = Langevin::new(p, Plain, Euclidean)
         .unwrap()
         .with_large_step(large.clone(), 0.2)

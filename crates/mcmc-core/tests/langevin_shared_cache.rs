@@ -5,11 +5,11 @@
 use std::sync::atomic::AtomicBool;
 
 use mcmc_core::langevin::{CacheSharing, Hybrid, Langevin, LangevinParams};
+use mcmc_core::proposal::IndependentUniform;
 use mcmc_core::render_loop::{
     IndependentStates, LoopBudget, LoopSettings, RenderLoop, Splat, SplatGrid,
 };
-use mcmc_core::{DifferentiableTarget, NoProgress, Proposal, Proposed, Target, Torus};
-use rand::{Rng, RngExt};
+use mcmc_core::{DifferentiableTarget, NoProgress, Target, Torus};
 
 /// `f(u) = 1 + u0` on the unit square, splatted at `(4 u0, 0.5)` on a 4 x 1 image.
 #[derive(Clone, Copy)]
@@ -59,25 +59,6 @@ impl IndependentStates<Vec<f64>> for Uniform {
     }
 }
 
-/// The large step: an independent uniform point of the square.
-#[derive(Clone, Copy, Debug)]
-struct UniformSquare;
-
-impl Proposal<Vec<f64>> for UniformSquare {
-    fn propose<R: Rng + ?Sized>(&self, _x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut R) -> Proposed {
-        y.clear();
-        y.extend([rng.random::<f64>(), rng.random::<f64>()]);
-        Proposed::hastings(0.0)
-    }
-    fn log_q(&self, _from: &Vec<f64>, to: &Vec<f64>) -> f64 {
-        if to.iter().all(|v| (0.0..1.0).contains(v)) {
-            0.0
-        } else {
-            f64::NEG_INFINITY
-        }
-    }
-}
-
 const H: usize = 500;
 
 fn run(
@@ -109,7 +90,10 @@ fn run(
                 kernel: |_| {
                     Langevin::new(params, Hybrid::new(&params), Torus)
                         .unwrap()
-                        .with_large_step(UniformSquare, 0.1)
+                        .with_large_step(
+                            IndependentUniform::new(vec![0.0; 2], vec![1.0; 2]).unwrap(),
+                            0.1,
+                        )
                         .unwrap()
                 },
                 controller: |_| CacheSharing,

@@ -56,6 +56,28 @@ pub trait Adaptation: Clone + Send + std::fmt::Debug {
     }
 }
 
+/// Two zeroed scratch vectors of length `n` (on the stack up to 64 dimensions) for forming a
+/// diagonal Gaussian without allocating.
+fn with_buffers<R>(n: usize, f: impl FnOnce(&mut [f64], &mut [f64]) -> R) -> R {
+    if n <= 64 {
+        let (mut a, mut b) = ([0.0f64; 64], [0.0f64; 64]);
+        f(&mut a[..n], &mut b[..n])
+    } else {
+        f(&mut vec![0.0; n], &mut vec![0.0; n])
+    }
+}
+
+/// The diminishing-adaptation weights `(t^-c1, t^-c2)` of step `steps + 1` (eq. 19-20), or
+/// `(1, 1)` without diminishing adaptation.
+fn diminishing_weights(params: &LangevinParams, steps: u64, diminishing: bool) -> (f64, f64) {
+    if diminishing {
+        let t = (steps + 1) as f64;
+        (t.powf(-params.c1), t.powf(-params.c2))
+    } else {
+        (1.0, 1.0)
+    }
+}
+
 /// Plain MALA (eq. 7): `M = I`, `m = g`; nothing adapts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Plain;
@@ -169,15 +191,6 @@ impl Online {
         self.diminishing
     }
 
-    fn weights(&self, params: &LangevinParams) -> (f64, f64) {
-        if self.diminishing {
-            let t = (self.t + 1) as f64;
-            (t.powf(-params.c1), t.powf(-params.c2))
-        } else {
-            (1.0, 1.0)
-        }
-    }
-
     fn ensure_dim(&mut self, d: usize) {
         if self.g2.len() != d {
             self.g2.clear();
@@ -204,32 +217,24 @@ impl Adaptation for Online {
     ) -> bool {
         let n = g.len();
         self.ensure_dim(n);
-        let (w1, w2) = self.weights(params);
-        let mut m_diag = [0.0f64; 64];
-        let mut drift = [0.0f64; 64];
-        let (mut mv, mut dv) = (Vec::new(), Vec::new());
-        let (m_diag, drift): (&mut [f64], &mut [f64]) = if n <= 64 {
-            (&mut m_diag[..n], &mut drift[..n])
-        } else {
-            mv.resize(n, 0.0);
-            dv.resize(n, 0.0);
-            (&mut mv, &mut dv)
-        };
-        for i in 0..n {
-            m_diag[i] = if self.precondition {
-                let g2 = params.beta * self.g2[i] + (1.0 - params.beta) * g[i] * g[i];
-                1.0 / ((1.0 - w1) + w1 * (params.delta + g2.sqrt()))
-            } else {
-                1.0
-            };
-            drift[i] = if self.momentum {
-                let d = params.alpha * self.d[i] + (1.0 - params.alpha) * g[i];
-                g[i] + w2 * d
-            } else {
-                g[i]
-            };
-        }
-        out.set_diagonal(params, m_diag, drift);
+        let (w1, w2) = diminishing_weights(params, self.t, self.diminishing);
+        with_buffers(n, |m_diag, drift| {
+            for i in 0..n {
+                m_diag[i] = if self.precondition {
+                    let g2 = params.beta * self.g2[i] + (1.0 - params.beta) * g[i] * g[i];
+                    1.0 / ((1.0 - w1) + w1 * (params.delta + g2.sqrt()))
+                } else {
+                    1.0
+                };
+                drift[i] = if self.momentum {
+                    let d = params.alpha * self.d[i] + (1.0 - params.alpha) * g[i];
+                    g[i] + w2 * d
+                } else {
+                    g[i]
+                };
+            }
+            out.set_diagonal(params, m_diag, drift);
+        });
         true
     }
     fn adapt(&mut self, params: &LangevinParams, _u: &[f64], g: &[f64], _first_visit: bool) {
@@ -302,12 +307,7 @@ impl Adaptation for FullOnline {
     ) -> bool {
         let n = g.len();
         self.ensure_dim(n);
-        let (w1, w2) = if self.diminishing {
-            let t = (self.t + 1) as f64;
-            (t.powf(-params.c1), t.powf(-params.c2))
-        } else {
-            (1.0, 1.0)
-        };
+        let (w1, w2) = diminishing_weights(params, self.t, self.diminishing);
         let gv = nalgebra::DVector::from_column_slice(g);
         let g2 = &self.g2 * params.beta + (&gv * gv.transpose()) * (1.0 - params.beta);
         let eig = nalgebra::SymmetricEigen::new(g2);
@@ -407,45 +407,37 @@ impl Adaptation for CacheDriven {
         } else {
             params.neighbours
         };
-        let mut g2 = [0.0f64; 64];
-        let mut mean = [0.0f64; 64];
-        let (mut g2v, mut meanv) = (Vec::new(), Vec::new());
-        let (g2, mean): (&mut [f64], &mut [f64]) = if n <= 64 {
-            (&mut g2[..n], &mut mean[..n])
-        } else {
-            g2v.resize(n, 0.0);
-            meanv.resize(n, 0.0);
-            (&mut g2v, &mut meanv)
-        };
-        let mut count = 0usize;
-        if include_self {
-            for i in 0..n {
-                g2[i] += g[i] * g[i];
-                mean[i] += g[i];
+        with_buffers(n, |g2, mean| {
+            let mut count = 0usize;
+            if include_self {
+                for i in 0..n {
+                    g2[i] += g[i] * g[i];
+                    mean[i] += g[i];
+                }
+                count += 1;
             }
-            count += 1;
-        }
-        for nb in self.neighbours.iter().take(others) {
-            let gc = self.view.gradient(nb.source, nb.index);
-            for i in 0..n {
-                g2[i] += gc[i] * gc[i];
-                mean[i] += gc[i];
+            for nb in self.neighbours.iter().take(others) {
+                let gc = self.view.gradient(nb.source, nb.index);
+                for i in 0..n {
+                    g2[i] += gc[i] * gc[i];
+                    mean[i] += gc[i];
+                }
+                count += 1;
             }
-            count += 1;
-        }
-        if count == 0 {
-            ones_like(n, |ones| {
-                mean.fill(0.0);
-                out.set_diagonal(params, ones, mean);
-            });
-            return true;
-        }
-        let s = 1.0 / count as f64;
-        for i in 0..n {
-            g2[i] = 1.0 / (params.delta + (g2[i] * s).sqrt());
-            mean[i] *= s;
-        }
-        out.set_diagonal(params, g2, mean);
+            if count == 0 {
+                ones_like(n, |ones| {
+                    mean.fill(0.0);
+                    out.set_diagonal(params, ones, mean);
+                });
+                return;
+            }
+            let s = 1.0 / count as f64;
+            for i in 0..n {
+                g2[i] = 1.0 / (params.delta + (g2[i] * s).sqrt());
+                mean[i] *= s;
+            }
+            out.set_diagonal(params, g2, mean);
+        });
         true
     }
     fn adapt(&mut self, _params: &LangevinParams, u: &[f64], g: &[f64], first_visit: bool) {

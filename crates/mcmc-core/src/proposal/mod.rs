@@ -2,11 +2,13 @@
 
 mod conditional;
 mod gaussian;
+mod independent;
 mod mixture;
 mod scaled;
 
 pub use conditional::ConditionalProposal;
 pub use gaussian::GaussianRandomWalk;
+pub use independent::IndependentUniform;
 pub use mixture::{FixedSelection, Mixture, Selection, MAX_COMPONENTS};
 pub use scaled::{Regional, Scaled, ScaledProposal};
 
