@@ -141,7 +141,9 @@ struct Visit {
 /// points, not blocks of `L` visits, so scales settle after a few hundred rounds (`gamma_n`
 /// reaches 0.3 after 250 updates); choose the render loop's `round_mutations` so that rounds
 /// are frequent but regions still collect `L` visits per round or two. A round costs
-/// O(visits + updated regions), not O(regions). A refinement likewise happens at the first
+/// O(visits + updated regions) plus, if any `lambda` changed, one copy of the `lambda` array
+/// (8 bytes per region; the partition is copied only when refined). A refinement likewise
+/// happens at the first
 /// synchronisation point after the `M_refine`-th mutation.
 ///
 /// # Refinement (section 6.2)

@@ -40,7 +40,9 @@ use crate::scene::{Camera, PathScene};
 /// ```
 #[derive(Clone, Debug)]
 pub struct RegionalSigmas<P> {
-    partition: P,
+    /// Behind its own `Arc`: publishing new scales copies the `lambda`s (8 bytes per region),
+    /// the partition only when it is refined.
+    partition: Arc<P>,
     lambdas: Vec<f64>,
     sigma_ratio: f64,
 }
@@ -57,7 +59,7 @@ impl<P: Partition<Path>> RegionalSigmas<P> {
         PathspaceError::check_range("sigma_ratio", sigma_ratio, 1e-6, 1e6)?;
         let n = partition.num_regions();
         Ok(Self {
-            partition,
+            partition: Arc::new(partition),
             lambdas: vec![lambda0; n],
             sigma_ratio,
         })
@@ -107,8 +109,11 @@ impl<P: Partition<Path>> RegionalSigmas<P> {
 
     /// Splits a region of the partition; every child inherits its `lambda` (section 6.2).
     /// Returns the fresh ids (the split id is the first child), `None` if it cannot split.
-    pub fn split(&mut self, region: usize) -> Option<Range<usize>> {
-        let fresh = self.partition.split(region)?;
+    pub fn split(&mut self, region: usize) -> Option<Range<usize>>
+    where
+        P: Clone,
+    {
+        let fresh = Arc::make_mut(&mut self.partition).split(region)?;
         let parent = self.lambdas[region];
         self.lambdas.resize(self.partition.num_regions(), parent);
         for k in fresh.clone() {
@@ -142,7 +147,7 @@ impl<C: Camera> RegionalSigmas<PathPartition<C>> {
         let sigma = |lambda: f64| (0.5 * lambda).exp();
         let centre = |i: usize, n: usize| (i as f64 + 0.5) / n as f64;
         let mut map = Vec::with_capacity(width * height);
-        match &self.partition {
+        match &*self.partition {
             PathPartition::Single => map.resize(width * height, sigma(self.lambdas[0])),
             PathPartition::Screen(p) => {
                 for y in 0..height {
