@@ -43,8 +43,9 @@ const R: usize = 16;
 /// Blocks per side of the regional comparison.
 const BLOCKS: usize = 4;
 /// Null-hypothesis comparisons: enclosure (qmc, lqmc, lqmc exploring NEE); Cornell box,
-/// glass Cornell box and depth-of-field scene, image mean and blocks (the same three).
-const N_COMPARISONS: usize = 3 + 3 * 3 * (1 + BLOCKS * BLOCKS);
+/// glass Cornell box and depth-of-field scene, image mean and blocks (the same three; on the
+/// depth-of-field scene also LQMC with every out-of-focus path in the DOF class).
+const N_COMPARISONS: usize = 3 + (3 * 3 + 1) * (1 + BLOCKS * BLOCKS);
 
 /// The Bonferroni-corrected two-sided critical value for `R - 1` degrees of freedom.
 fn critical() -> f64 {
@@ -66,9 +67,20 @@ enum Method {
     Lqmc(LqmcParams),
 }
 
+/// LQMC with the depth-of-field threshold at 0.05 pixels: at 24x24 nearly every path of the
+/// dof scene is then in the DOF class, explored mostly with `b = 0` (a new lens point
+/// reconnected to the static `z_1`).
+fn dof_everywhere() -> LqmcParams {
+    LqmcParams {
+        dof_coc_pixels: 0.05,
+        ..LqmcParams::default()
+    }
+}
+
 fn name(method: Method) -> &'static str {
     match method {
         Method::Qmc => "qmc",
+        Method::Lqmc(p) if p.dof_coc_pixels < 1.0 => "lqmc (DOF class everywhere)",
         Method::Lqmc(p) if p.explore_nee => "lqmc (NEE explored)",
         Method::Lqmc(_) => "lqmc",
     }
@@ -256,7 +268,24 @@ fn dof_scene_matches_bdpt() {
         Method::Qmc,
         Method::Lqmc(LqmcParams::default()),
         Method::Lqmc(explore_all()),
+        Method::Lqmc(dof_everywhere()),
     ] {
+        if let Method::Lqmc(params) = method {
+            // How much of the image is explored (most of it with the DOF class forced).
+            let s = pt_settings(scene, 4, CORNELL_DEPTH, 1);
+            let out = render_lqmc(scene, &s, &params, &NoProgress, &AtomicBool::new(false));
+            eprintln!(
+                "dof {}: {} of {} seeds' contributions explored, {} members, {} rejected",
+                name(method),
+                out.explored,
+                out.seeds,
+                out.members,
+                out.rejected
+            );
+            if params.dof_coc_pixels < 1.0 {
+                assert!(out.explored > out.seeds / 2, "{out:?}");
+            }
+        }
         let images = replicates(method, scene, 16, CORNELL_DEPTH, 41);
         let t = max_t(&images, reference);
         eprintln!(

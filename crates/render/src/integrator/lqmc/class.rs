@@ -19,7 +19,7 @@ pub enum PathClass {
     /// finer image tiles, coarser direction tiles.
     Caustic,
     /// The first vertex is out of focus (circle of confusion above the threshold): `N = 23`,
-    /// the breakup point prefers `b = 1`.
+    /// the breakup point prefers `b = 0` (a new lens point reconnected to `z_1`).
     DepthOfField,
     /// Next-event estimation that is neither caustic nor out of focus: splatted unexplored
     /// ("we are very careful not to explore the sample"), or with
@@ -78,12 +78,12 @@ pub(crate) fn classify(params: &LqmcParams, rough: &[f32], is_nee: bool, coc: f3
     }
 }
 
-/// Breakup weights `w_b`, `b = 1..=L` into `weights[b - 1]` (section 3.3: a CDF over the
-/// minimum roughness of `z_b` and `z_{b+1}`; `z_L` counts as rough). `b = L` (re-trace the
-/// whole path, no static suffix) gets weight 1 only if every other weight is 0 (all
-/// connections would touch a specular vertex: the authors' "force a full retrace"); depth of
-/// field multiplies `w_1` (reconnect `z_1` to `z_2`, the lens explored) by
-/// [`LqmcParams::dof_first_vertex_weight`].
+/// Breakup weights `w_b`, `b = 0..=L` into `weights[b]` (section 3.3: a CDF over the
+/// minimum roughness of `z_b` and `z_{b+1}`; `z_L` counts as rough). `b = 0` (a new lens
+/// point reconnected to the static `z_1`: only the aperture is explored) is for depth of
+/// field only, with the authors' weight [`LqmcParams::dof_lens_weight`]; `b = L` (re-trace
+/// the whole path, no static suffix) gets weight 1 only if every other weight is 0 (all
+/// connections would touch a specular vertex: the authors' "force a full retrace").
 pub(crate) fn breakup_weights(
     params: &LqmcParams,
     rough: &[f32],
@@ -92,13 +92,15 @@ pub(crate) fn breakup_weights(
 ) {
     weights.clear();
     let length = rough.len() + 1;
+    weights.push(if class == PathClass::DepthOfField {
+        params.dof_lens_weight
+    } else {
+        0.0
+    });
     for b in 1..length {
         let rb = rough[b - 1];
         let rn = if b + 1 < length { rough[b] } else { 1.0 };
         weights.push(f64::from(rb.min(rn)));
-    }
-    if class == PathClass::DepthOfField && !weights.is_empty() {
-        weights[0] *= params.dof_first_vertex_weight;
     }
     let any = weights.iter().any(|&w| w > 0.0);
     weights.push(if any { 0.0 } else { 1.0 });
@@ -106,8 +108,9 @@ pub(crate) fn breakup_weights(
 
 /// What a lattice set explores: `(dimension, tiles)` pairs in lattice order (section 3.3 /
 /// the authors' order: image plane first, then aperture, time, then the BSDF directions at
-/// `z_1 .. z_{b-1}`, and for a full re-trace of an NEE path the light position). Image
-/// dimensions are global image coordinates (dimension 0 = x / width, 1 = y / height).
+/// `z_1 .. z_{b-1}`, and for a full re-trace of an NEE path the light position; for `b = 0`
+/// the aperture only, Fig. 7's "aperture only"). Image dimensions are global image
+/// coordinates (dimension 0 = x / width, 1 = y / height).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Layout {
     /// `(dimension of the seed's numbers, tiles)`.
@@ -126,6 +129,16 @@ impl Layout {
     ) {
         self.dims.clear();
         let caustic = class == PathClass::Caustic;
+        if b == 0 {
+            let k = if caustic {
+                params.aperture_tiles_caustic
+            } else {
+                params.aperture_tiles
+            };
+            self.dims.push((2, k));
+            self.dims.push((3, k));
+            return;
+        }
         let kx = if caustic {
             params.image_tiles_caustic
         } else {
@@ -185,15 +198,15 @@ mod tests {
         assert_eq!(classify(&p, &[1.0, 0.0], false, 0.0), PathClass::Caustic);
         let mut w = Vec::new();
         breakup_weights(&p, &[1.0, 0.0], PathClass::Caustic, &mut w);
-        assert_eq!(w, [0.0, 0.0, 1.0]);
+        assert_eq!(w, [0.0, 0.0, 0.0, 1.0]);
         // diffuse -> diffuse -> light: normal, b = 1, 2 equally likely.
         assert_eq!(classify(&p, &[1.0, 1.0], false, 0.0), PathClass::Normal);
         breakup_weights(&p, &[1.0, 1.0], PathClass::Normal, &mut w);
-        assert_eq!(w, [1.0, 1.0, 0.0]);
+        assert_eq!(w, [0.0, 1.0, 1.0, 0.0]);
         assert_eq!(classify(&p, &[1.0], true, 0.0), PathClass::Nee);
         assert_eq!(classify(&p, &[1.0], true, 5.0), PathClass::DepthOfField);
         assert_eq!(classify(&p, &[], false, 0.0), PathClass::Direct);
         breakup_weights(&p, &[1.0, 0.5], PathClass::DepthOfField, &mut w);
-        assert_eq!(w, [0.5 * p.dof_first_vertex_weight, 0.5, 0.0]);
+        assert_eq!(w, [p.dof_lens_weight, 0.5, 0.5, 0.0]);
     }
 }

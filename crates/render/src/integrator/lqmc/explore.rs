@@ -3,7 +3,7 @@
 //! prefix `z_1 .. z_b` from the member's numbers, reconnect `z_b` to the seed's static
 //! `z_{b+1}`, and weight by eq. 8-9 with the breakup probability.
 
-use glam::{UVec2, Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3, Vec3A};
 use lqmc::{
     sample_breakup, ExploreScratch, LocalIntegrand, LocalQmc, Rank1Lattice, Rebuilt, Splat, Tiling,
 };
@@ -13,7 +13,7 @@ use super::class::{
     breakup_weights, circle_of_confusion, classify, vertex_roughness, Layout, PathClass,
 };
 use super::LqmcParams;
-use crate::camera::Camera;
+use crate::camera::{Camera, Ray};
 use crate::frame::shading_consistent;
 use crate::integrator::halton_sampler::{HaltonSampler, ReplaySampler};
 use crate::integrator::power_heuristic;
@@ -195,7 +195,7 @@ impl<'a> Explorer<'a> {
         let Some((b_index, _)) = sample_breakup(&self.weights, u_b) else {
             return false;
         };
-        let b = b_index + 1;
+        let b = b_index;
         self.layout
             .build(&self.params, self.camera, class, event, b);
         if self.layout.dims.len() > MAX_EXPLORED {
@@ -225,6 +225,7 @@ impl<'a> Explorer<'a> {
             };
             self.u_seed.push(u.min(lqmc::ONE_MINUS_EPSILON));
         }
+        let p_seed = self.weights[b] / self.weights.iter().sum::<f64>();
         let ctx = Context {
             scene: self.scene,
             camera: self.camera,
@@ -235,13 +236,20 @@ impl<'a> Explorer<'a> {
             event,
             class,
             b,
+            p_seed,
         };
         // The seed reconnected to itself: the same formulas as every member.
-        let Some((value, q)) = ctx.evaluate(&self.path) else {
+        let evaluated = if b == 0 {
+            let u_lens = Vec2::new(self.seed_numbers[2], self.seed_numbers[3]);
+            ctx.evaluate_lens(u_lens)
+        } else {
+            ctx.evaluate(&self.path)
+                .map(|(value, q)| (value, q, self.path.raster))
+        };
+        let Some((value, q, raster)) = evaluated else {
             return false;
         };
-        let p_seed = self.weights[b - 1] / self.weights.iter().sum::<f64>();
-        let seed_rebuilt = rebuilt(&self.params, self.path.raster, value, q, p_seed);
+        let seed_rebuilt = rebuilt(&self.params, raster, value, q, p_seed);
         let mut member = Member {
             ctx,
             overrides: &mut self.overrides,
@@ -353,9 +361,39 @@ struct Context<'s> {
     event: &'s PathEvent,
     class: PathClass,
     b: usize,
+    /// `P(b|X)` of the seed (that of every `b = 0` member: nothing it depends on moves).
+    p_seed: f64,
 }
 
 impl Context<'_> {
+    /// `b = 0`: the lens point of `u_lens` reconnected to the seed's static `z_1`
+    /// ([`Camera::sample_wi`]): contribution, `q` and raster position. The camera factor
+    /// `W_e G / p` of a camera-sampled `z_1` is 1; `q` is the density of `z_1` given the lens
+    /// point, `pdf_dir |cos_1| / d^2` (`pdf_dir = 1 / (A cos^3)`, [`Camera::pdf_we`]), times
+    /// `z_1`'s outgoing density with its new `wo`.
+    fn evaluate_lens(&self, u_lens: Vec2) -> Option<(Vec3, f64, Vec2)> {
+        let ray = self.seed.ray?;
+        let z1 = self.seed.vertices.first()?;
+        let cs = self.camera.sample_wi(z1.si.p, u_lens, ray.time)?;
+        if !self
+            .scene
+            .unoccluded_between(cs.p_lens, Vec3A::ZERO, z1.si.p, z1.si.ng)
+        {
+            return None;
+        }
+        let d = z1.si.p - cs.p_lens;
+        let dist2 = d.length_squared();
+        let dir = d.try_normalize()?;
+        let (_, pdf_dir) = self.camera.pdf_we(&Ray::new(cs.p_lens, dir, ray.time));
+        let cos1 = z1.si.ng.dot(dir).abs();
+        if !positive(pdf_dir) || !positive(dist2) || !positive(cos1) {
+            return None;
+        }
+        let q = f64::from(pdf_dir) * f64::from(cos1) / f64::from(dist2);
+        let (value, q) = self.continue_from(1, -dir, Vec3::ONE, q)?;
+        Some((value, q, cs.p_raster))
+    }
+
     /// The contribution `w f / p` of the path "`path`'s prefix `z_1..z_b`, reconnected to
     /// the seed's static suffix `z_{b+1}..z_L`" and `q = p_t(X) / J`, the density of the
     /// static suffix given the prefix, up to factors common to every member (they cancel in
@@ -430,7 +468,7 @@ impl Context<'_> {
             return None;
         }
         let ratio_b = f_b / pdf_b;
-        let mut q = f64::from(pdf_b) * f64::from(cos_next) / f64::from(dist2);
+        let q = f64::from(pdf_b) * f64::from(cos_next) / f64::from(dist2);
         if b + 1 == length {
             // z_{b+1} is the emitter (or the environment direction).
             let (le, light_pdf) = match (event.kind, next) {
@@ -449,16 +487,31 @@ impl Context<'_> {
             let w = power_heuristic(pdf_b, light_pdf);
             return Some((zb.beta * ratio_b * le * w, q));
         }
-        let z1 = next?;
-        let wo_world = -dir;
+        let _ = next?;
+        self.continue_from(b + 1, -dir, zb.beta * ratio_b, q)
+    }
+
+    /// The static suffix from `z_k` on, `z_k` now seen along `wo_world` (towards the moved
+    /// `z_{k-1}`), after a prefix of throughput `prefix` and suffix density `q` so far: NEE at
+    /// `z_k`, or `z_k`'s scatter with its new `wo`, the static middle, and the end term.
+    fn continue_from(
+        &self,
+        k: usize,
+        wo_world: Vec3A,
+        prefix: Vec3,
+        q: f64,
+    ) -> Option<(Vec3, f64)> {
+        let event = self.event;
+        let z1 = self.seed.vertices.get(k - 1)?;
+        let mut q = q;
         if let EventKind::Nee(ls) = event.kind {
-            if event.vertex == b + 1 {
-                // z_{b+1} connects to the light: its NEE term with the new wo, the light
+            if event.vertex == k {
+                // z_k connects to the light: its NEE term with the new wo, the light
                 // sample and its visibility static.
                 let (end, _) = nee_towards(
                     self.scene, &z1.si, &z1.bsdf, &z1.frame, wo_world, &ls, false,
                 )?;
-                return Some((zb.beta * ratio_b * end, q));
+                return Some((prefix * end, q));
             }
         }
         let out = z1.out?;
@@ -476,16 +529,16 @@ impl Context<'_> {
             return None;
         }
         q *= f64::from(pdf1);
-        let mut value = zb.beta * ratio_b * (f1 / pdf1);
-        // The static middle z_{b+2} .. z_{m-1}, m the event's vertex.
-        for k in b + 2..event.vertex {
-            value *= self.seed.z(k).out?.weight;
+        let mut value = prefix * (f1 / pdf1);
+        // The static middle z_{k+1} .. z_{m-1}, m the event's vertex.
+        for i in k + 1..event.vertex {
+            value *= self.seed.z(i).out?.weight;
         }
-        // The end term; the hit's MIS weight depends on z_{b+1}'s pdf if it is the last
+        // The end term; the hit's MIS weight depends on z_k's pdf if it is the last
         // scattering vertex.
         let end = match event.kind {
             EventKind::Emission { light_pdf } | EventKind::Environment { light_pdf, .. }
-                if event.vertex == b + 2 =>
+                if event.vertex == k + 1 =>
             {
                 let w_old = event.mis;
                 if w_old > 0.0 {
@@ -525,6 +578,15 @@ impl LocalIntegrand for Member<'_, '_> {
 
     fn rebuild(&mut self, u_bar: &[f64]) -> Option<Rebuilt<(Vec2, Vec3)>> {
         let ctx = &self.ctx;
+        if ctx.b == 0 {
+            // Only the aperture moves: no re-trace, class and P(b|X) are the seed's.
+            let u_lens = Vec2::new(to_f32_unit(u_bar[0]), to_f32_unit(u_bar[1]));
+            let (value, q, raster) = ctx.evaluate_lens(u_lens)?;
+            if value == Vec3::ZERO || !positive(q) {
+                return None;
+            }
+            return Some(rebuilt(ctx.params, raster, value, q, ctx.p_seed));
+        }
         let replay = &mut *self.replay;
         self.overrides.clear();
         let mut pixel = UVec2::ZERO;
@@ -582,7 +644,7 @@ impl LocalIntegrand for Member<'_, '_> {
         }
         breakup_weights(ctx.params, self.rough, ctx.class, self.weights);
         let total: f64 = self.weights.iter().sum();
-        let p_b = self.weights[ctx.b - 1] / total;
+        let p_b = self.weights[ctx.b] / total;
         if !positive(p_b) {
             return None;
         }
@@ -610,7 +672,14 @@ mod tests {
         .unwrap();
         let mut glass16 = glass.clone();
         glass16.set_resolution(16, 16);
-        for scene in [Scene::cornell_box(16, 16), glass16] {
+        let mut dof16 = Scene::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/dof.gltf"
+        )))
+        .unwrap();
+        dof16.set_resolution(16, 16);
+        let mut lens_checked = 0;
+        for scene in [Scene::cornell_box(16, 16), glass16, dof16] {
             let camera = *scene.camera();
             let params = LqmcParams::default();
             let mut sampler = ReplaySampler::new(IndependentSampler::new(9));
@@ -628,6 +697,35 @@ mod tests {
                 trace(&scene, &camera, pixel, &mut sampler, limit, &mut path);
                 let recorded = sampler.recorded().to_vec();
                 for event in &path.events {
+                    let ctx = |b| Context {
+                        scene: &scene,
+                        camera: &camera,
+                        params: &params,
+                        max_depth: 4,
+                        seed: &path,
+                        recorded: &recorded,
+                        event,
+                        class: PathClass::DepthOfField,
+                        b,
+                        p_seed: 1.0,
+                    };
+                    if camera.lens_radius() > 0.0 && event.length() >= 2 {
+                        // b = 0: the seed's own lens point reconnected to z_1.
+                        let u_lens = Vec2::new(recorded[2], recorded[3]);
+                        if let Some((value, q, raster)) = ctx(0).evaluate_lens(u_lens) {
+                            let err = (value - event.value).abs().max_element();
+                            assert!(
+                                err <= 1e-3 * (1e-3 + event.value.max_element()),
+                                "b 0 of {event:?}: {value} vs {}",
+                                event.value
+                            );
+                            assert!((raster - path.raster).length() < 1e-2, "{raster}");
+                            assert!(q > 0.0 && q.is_finite());
+                            lens_checked += 1;
+                        } else {
+                            assert!(path.z(1).bsdf.is_specular(), "b 0 of {event:?}");
+                        }
+                    }
                     for b in 1..=event.length() {
                         let ctx = Context {
                             scene: &scene,
@@ -639,6 +737,7 @@ mod tests {
                             event,
                             class: PathClass::Normal,
                             b,
+                            p_seed: 1.0,
                         };
                         let length = event.length();
                         let specular = b < length
@@ -662,5 +761,6 @@ mod tests {
             }
             assert!(checked > 200, "{checked}");
         }
+        assert!(lens_checked > 100, "{lens_checked}");
     }
 }

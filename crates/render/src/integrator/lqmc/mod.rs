@@ -13,11 +13,14 @@
 //!    explore the sample"; [`LqmcParams::explore_nee`] explores it with `N = 7`, as the
 //!    authors' code does), or too short (`L < 2`, splatted directly);
 //! 3. draw the breakup point `b` from the CDF over `min(roughness(z_b), roughness(z_{b+1}))`
-//!    (section 3.3), its probability `P(b|X)` going into the weights;
+//!    (section 3.3; `b = 0`, the lens, with weight 80 for depth of field), its probability
+//!    `P(b|X)` going into the weights;
 //! 4. explore the image plane (global image coordinates), the aperture, the time and the
-//!    BSDF directions at `z_1 .. z_{b-1}` in the class's tiles (section 4 "Parameters");
-//! 5. for each member: re-trace `z_1 .. z_b`, reject it if its class (or `P(b|.) = 0`, or a
-//!    zero contribution) differs, reconnect `z_b` to the static `z_{b+1}`, and report its
+//!    BSDF directions at `z_1 .. z_{b-1}` in the class's tiles (section 4 "Parameters"), or
+//!    for `b = 0` the aperture alone;
+//! 5. for each member: re-trace `z_1 .. z_b` (for `b = 0`: sample the new lens point),
+//!    reject it if its class (or `P(b|.) = 0`, or a zero contribution) differs, reconnect
+//!    `z_b` to the static `z_{b+1}`, and report its
 //!    contribution and the density of the static suffix given its prefix
 //!    (`p_t(X_j) / J_j`, eq. 8 and 11);
 //! 6. splat every member with the weight of eq. 9 times `P(b|X_j)`.
@@ -85,10 +88,10 @@ pub struct LqmcParams {
     /// Circle of confusion (pixels, at the first vertex) above which a path is depth of
     /// field (the paper: "a threshold value"): 1 pixel.
     pub dof_coc_pixels: f32,
-    /// Factor on the breakup weight of `b = 1` for depth-of-field paths (the authors' code
-    /// puts weight 80 on `b = 0`, a lens-only reconnection, which we do not implement; `b = 1`
-    /// explores the lens and the image plane and reconnects `z_1` to `z_2`): 80.
-    pub dof_first_vertex_weight: f64,
+    /// Breakup weight of `b = 0` (a new lens point reconnected to the static `z_1`) for
+    /// depth-of-field paths; 0 for the other classes (the authors' code: 80, against
+    /// weights of at most 1 for the other `b`).
+    pub dof_lens_weight: f64,
     /// Include `P(b|X)` in the weights (true; false is the authors' code, biased whenever
     /// `P(b|.)` varies inside a set).
     pub breakup_probability_in_weights: bool,
@@ -117,7 +120,7 @@ impl LqmcParams {
             light_tiles: 50,
             specular_roughness: 0.1,
             dof_coc_pixels: 1.0,
-            dof_first_vertex_weight: 80.0,
+            dof_lens_weight: 80.0,
             breakup_probability_in_weights: true,
             suffix_density_in_weights: true,
         }
