@@ -129,7 +129,8 @@ struct Visit {
 /// `lambda`; the prose's opposite reading is wrong), `gamma_n = min(gamma_max, gamma_scale
 /// n^{-1/2})` (eq. 6; Alg. 1 line 15 is garbled), `lambda >= lambda_min`, then `i_k = A_k =
 /// 0`, `n_k += 1`. The estimate divides by the visits counted (Alg. 1's `i_k > L` would sum
-/// `L + 1` values and divide by `L`).
+/// `L + 1` values and divide by `L`); fewer than `L` visits carry over to the next round
+/// (they were observed at the same `lambda_k`, which only changes at an update).
 ///
 /// # Staleness, and why one update per region per round
 /// Within a round every chain proposes with the scales published at the round's start, so
@@ -143,8 +144,7 @@ struct Visit {
 /// are frequent but regions still collect `L` visits per round or two. A round costs
 /// O(visits + updated regions) plus, if any `lambda` changed, one copy of the `lambda` array
 /// (8 bytes per region; the partition is copied only when refined). A refinement likewise
-/// happens at the first
-/// synchronisation point after the `M_refine`-th mutation.
+/// happens at the first synchronisation point after the `M_refine`-th mutation.
 ///
 /// # Refinement (section 6.2)
 /// At the first synchronisation point after every `M_refine` mutations (all chains): every
@@ -178,7 +178,8 @@ struct Visit {
 /// let controller = SharedRegionalAdaptation::new(params).unwrap();
 /// assert_eq!(controller.params().adapt.updates_every, 10);
 /// ```
-/// (`tests/regional.rs` runs it through mcmc-core's `RenderLoop`.)
+/// The module documentation synchronises a chain by hand; `tests/regional_loop.rs` runs the
+/// controller through mcmc-core's `RenderLoop`.
 #[derive(Clone, Debug)]
 pub struct SharedRegionalAdaptation {
     params: RegionalAdaptParams,
