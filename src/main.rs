@@ -1,4 +1,5 @@
-//! The `chainlight` command-line tool: render a scene to EXR + PNG, or compare two EXR images.
+//! The `chainlight` command-line tool: render a scene to EXR + PNG, compare two EXR images, or
+//! write an HTML comparison report.
 
 mod cli;
 

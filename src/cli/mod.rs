@@ -5,6 +5,7 @@ mod integrator;
 mod parse;
 mod progress;
 mod render_cmd;
+mod report_cmd;
 
 use std::error::Error;
 use std::process::ExitCode;
@@ -22,12 +23,16 @@ struct Cli {
     command: Command,
 }
 
+// Parsed once per process: boxing the large `render` arguments would gain nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Render a glTF scene (or the built-in Cornell box) to an EXR and a PNG preview.
     Render(render_cmd::RenderArgs),
     /// Compare an EXR image with a reference EXR: print error metrics, write an error map.
     Compare(compare_cmd::CompareArgs),
+    /// Write a self-contained HTML report comparing result images with a reference.
+    Report(report_cmd::ReportArgs),
 }
 
 /// Parses the command line, runs the command and turns errors into a message and exit code 1
@@ -37,6 +42,7 @@ pub(crate) fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(args),
         Command::Compare(args) => compare_cmd::run(args),
+        Command::Report(args) => report_cmd::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
