@@ -238,7 +238,7 @@ impl<'a> PathSpaceScene<'a> {
         };
         let s = bsdf.sample(wo_l, u, Vec2::ZERO, TransportMode::Radiance)?;
         let reflects = s.wi.z * wo_l.z > 0.0;
-        if reflects != (lobe == SpecularLobe::Reflection) || !(s.pdf > 0.0) {
+        if reflects != (lobe == SpecularLobe::Reflection) || s.pdf.is_nan() || s.pdf <= 0.0 {
             return None;
         }
         let wi = to_vec3(frame.to_world(s.wi)).try_normalize()?;
@@ -246,7 +246,7 @@ impl<'a> PathSpaceScene<'a> {
     }
 
     /// Camera-space coordinates of a world direction.
-    fn to_camera(&self, dir: Vec3) -> Vec3 {
+    fn camera_coordinates(&self, dir: Vec3) -> Vec3 {
         Vec3::new(dir.dot(self.right), dir.dot(self.up), dir.dot(self.forward))
     }
 }
@@ -295,7 +295,7 @@ impl Bsdfs for PathSpaceScene<'_> {
             return Rgb::BLACK;
         }
         let cos_g = wi.dot(p.geometric_normal).abs();
-        if !(cos_g > 0.0) {
+        if cos_g.is_nan() || cos_g <= 0.0 {
             return Rgb::BLACK;
         }
         let f = bsdf.eval(
@@ -329,7 +329,7 @@ impl Bsdfs for PathSpaceScene<'_> {
             Vec2::new(uf[1], uf[2]),
             TransportMode::Radiance,
         )?;
-        if !(s.pdf > 0.0) {
+        if s.pdf.is_nan() || s.pdf <= 0.0 {
             return None;
         }
         let wi = to_vec3(frame.to_world(s.wi)).try_normalize()?;
@@ -380,7 +380,7 @@ impl Emitters for PathSpaceScene<'_> {
         let lights = self.scene.lights();
         let (index, pmf) = lights.select((u[0] as f32).min(1.0f32.next_down()))?;
         let light = lights.lights().get(index as usize)?;
-        if !(light.area > 0.0) {
+        if light.area.is_nan() || light.area <= 0.0 {
             return None;
         }
         let (p, b) = light.sample_point_bary(Vec2::new(u[1] as f32, u[2] as f32));
@@ -414,8 +414,8 @@ impl Camera for PathSpaceScene<'_> {
     }
 
     fn raster(&self, dir: Vec3) -> Option<[f64; 2]> {
-        let c = self.to_camera(dir);
-        if !(c.z > 0.0) {
+        let c = self.camera_coordinates(dir);
+        if c.z.is_nan() || c.z <= 0.0 {
             return None;
         }
         let u = 0.5 * (c.x / (c.z * self.half[0]) + 1.0);
@@ -431,7 +431,7 @@ impl Camera for PathSpaceScene<'_> {
         if self.raster(dir).is_none() {
             return 0.0;
         }
-        let cos = self.to_camera(dir).z / dir.length();
+        let cos = self.camera_coordinates(dir).z / dir.length();
         1.0 / (self.film_area * cos * cos * cos)
     }
 }
