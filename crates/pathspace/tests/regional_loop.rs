@@ -622,3 +622,115 @@ fn shared_regional_controller_reaches_the_target_in_both_halves_global_cannot() 
         "a global scale reached the target in both halves: {global:?}"
     );
 }
+
+/// An exact draw from `pi / b` on the two-material scene by rejection from the sampler:
+/// `f / p <= N / (1 - c) * max(albedo, k_s (e + 2) / (e + 1)) * L_e` (the hit technique's
+/// BSDF sampling cancels the BSDF up to that factor; the camera importance cancels its
+/// direction density), here `2 / 0.5 * 0.9003 < 3.7`.
+fn exact_two_material(scene: &'static AnalyticScene, rng: &mut rand_pcg::Pcg64) -> Path {
+    let smp = sampler(scene, 2);
+    let bound = 3.7;
+    loop {
+        let p = common::draw(&smp, rng);
+        let ratio = p.contribution(scene).luminance() / smp.log_density(&p).exp();
+        assert!(ratio <= bound, "f/p = {ratio} exceeds the bound");
+        if rand::RngExt::random::<f64>(rng) * bound < ratio {
+            return p;
+        }
+    }
+}
+
+/// With the two-material scene's learned scales frozen (left ~0.02, right ~0.3: two regions
+/// that need different scales), 400 steps of the regional lens + bidirectional kernel from
+/// 8000 exact starts leave the distribution of the raster position (4 x 2 bins) unchanged: a
+/// two-sample chi-square against 8000 independent exact draws. Negative control: the lens
+/// with the reverse density at the current state's region scale moves mass to the left.
+#[test]
+fn two_region_kernel_with_frozen_learned_scales_preserves_pi() {
+    use mcmc_core::testing::chi_square_two_sample;
+    let scene = two_material_scene();
+    let sigmas = {
+        let part = PathPartition::Screen(ScreenPartition::new(
+            scene,
+            PlanePartition::grid(2).unwrap(),
+        ));
+        let mut s = RegionalSigmas::new(part, 0.0, 1.0).unwrap();
+        for (k, sigma) in [0.022f64, 0.30, 0.019, 0.30].into_iter().enumerate() {
+            s.set_lambda(k, (sigma * sigma).ln());
+        }
+        SharedSigmas::new(s)
+    };
+    let target = PathTarget::new(scene);
+    let bin = |p: &Path| {
+        let r = p.raster(scene).unwrap();
+        ((r[0] * 4.0) as usize).min(3) * 2 + usize::from(r[1] >= 0.5)
+    };
+    const STARTS: u64 = 8000;
+    const STEPS: u64 = 400;
+    let mut reference = vec![0u64; 8];
+    let mut rng = common::rng(900);
+    for _ in 0..STARTS {
+        reference[bin(&exact_two_material(scene, &mut rng))] += 1;
+    }
+    let stepped = |kernel: &dyn Fn() -> Box<dyn FnMut(Path, rand_pcg::Pcg64) -> Path>| {
+        let mut counts = vec![0u64; 8];
+        for i in 0..STARTS {
+            let mut rng = common::rng(10_000 + i);
+            let x0 = exact_two_material(scene, &mut rng);
+            counts[bin(&kernel()(x0, rng))] += 1;
+        }
+        counts
+    };
+    let correct = stepped(&|| {
+        let k = Mh::new(
+            ra_mixture(
+                PerturbationKind::Lens,
+                Perturbation::lens(scene, sigmas.clone()),
+                bidirectional(scene, 2),
+            )
+            .unwrap(),
+        );
+        Box::new(move |x0, rng| {
+            let mut chain = Chain::new(&target, k.clone(), NoAdaptation, rng, x0).unwrap();
+            chain.run(STEPS, &mut ()).unwrap();
+            chain.state().clone()
+        })
+    });
+    let report = chi_square_two_sample(&correct, &reference, 5.0);
+    eprintln!("regional lens + bidirectional: {correct:?} vs {reference:?}: {report:?}");
+    report.assert_passes("two-region regional kernel, frozen scales", 1);
+    let broken = stepped(&|| {
+        let k = Mh::new(CurrentScaleReverse(Perturbation::lens(
+            scene,
+            sigmas.clone(),
+        )));
+        Box::new(move |x0, rng| {
+            let mut chain = Chain::new(&target, k.clone(), NoAdaptation, rng, x0).unwrap();
+            chain.run(STEPS, &mut ()).unwrap();
+            chain.state().clone()
+        })
+    });
+    let report = chi_square_two_sample(&broken, &reference, 5.0);
+    eprintln!("reverse at the current region's scale: {broken:?}: {report:?}");
+    assert!(
+        report.p_value < 1e-6,
+        "the broken kernel passed: {report:?}"
+    );
+}
+
+/// The bug of the control: the reverse density at the current state's region scale.
+#[derive(Clone)]
+struct CurrentScaleReverse<Sc>(Perturbation<'static, AnalyticScene, Sc>);
+
+impl<Sc: pathspace::ScaleSource + Clone> Proposal<Path> for CurrentScaleReverse<Sc> {
+    fn propose<R: Rng + ?Sized>(&self, x: &Path, y: &mut Path, rng: &mut R) -> Proposed {
+        let s = self.0.scale().sigmas(x);
+        if !self.0.propose_with(x, y, rng, s) {
+            return Proposed::Invalid { component: 0 };
+        }
+        Proposed::hastings(self.0.log_q_with(y, x, s) - self.0.log_q_with(x, y, s))
+    }
+    fn log_q(&self, from: &Path, to: &Path) -> f64 {
+        self.0.log_q(from, to)
+    }
+}
