@@ -3,7 +3,9 @@
 //! lock-based sharing is not: negative control); RA-MLT converges to the furnace box's closed
 //! form (MLT without the Hastings term does not: negative control); on a scene whose two image
 //! halves need different scales the shared regional controller brings both halves' acceptance
-//! to the target within 0.05, a global controller cannot.
+//! to the target within 0.05, a global controller cannot; on that scene the regional kernel
+//! with frozen scales preserves `pi` from exact starts (the reverse density at the current
+//! state's region scale does not: negative control).
 
 mod common;
 
