@@ -7,11 +7,23 @@
 //! automatic choice falls. relMSE is the median over `--runs` seeds (MCMC errors are heavy
 //! tailed; the DRMLT paper reports medians too).
 //!
-//! `cargo run --release --example zsolnai_large_step -- [--size 64] [--mpp 64] [--runs 3] [scene ...]`
+//! Each scene also gets a run directory, `<out>/<scene>/` (default `--out
+//! out/zsolnai_large_step`): the downsampled reference, every method's final image per seed
+//! (EXR), error-vs-time samples from extra runs at 1/8, 1/4 and 1/2 of the budget, `run.json`
+//! and a self-contained `report.html` (`chainlight::report`; open it in a browser, or rebuild it
+//! with `chainlight report <out>/<scene>`). `--no-report` skips the run directory and the extra
+//! runs.
+//!
+//! `cargo run --release --example zsolnai_large_step -- [--size 64] [--mpp 64] [--runs 3] [--out DIR] [--no-report] [scene ...]`
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
+use chainlight::report::{
+    current_commit, write_report, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest,
+    SeedImage,
+};
+use render::image::Image;
 use render::mlt::LargeStepMode;
 use render::scene::Scene;
 use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
@@ -21,11 +33,89 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// A method's name, large-step mode and final (seed, image, render seconds) per seed.
+type MethodFinals = (String, LargeStepMode, Vec<(u64, Image, f64)>);
+
+/// Writes `dir`: the reference, every method's images, convergence samples (extra runs at
+/// 1/8, 1/4 and 1/2 of `mpp`, plus the final run), `run.json` and `report.html`.
+fn write_run(
+    dir: &Path,
+    scene: &str,
+    params: &[(&str, String)],
+    reference: &Image,
+    finals: &[MethodFinals],
+    run: &dyn Fn(LargeStepMode, u64, u32) -> (Image, f64),
+    mpp: u32,
+) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    render::image_io::write_exr(dir.join("reference.exr"), reference)?;
+    let mut methods = Vec::new();
+    for (name, mode, images) in finals {
+        let slug: String = name
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .collect();
+        let mut seed_images = Vec::new();
+        let mut convergence = Vec::new();
+        for (seed, image, secs) in images {
+            let file = format!("{slug}_seed{seed}.exr");
+            render::image_io::write_exr(dir.join(&file), image)?;
+            seed_images.push(SeedImage {
+                seed: *seed,
+                path: file.into(),
+            });
+            let mut points = Vec::new();
+            for div in [8, 4, 2] {
+                if mpp / div == 0 {
+                    continue;
+                }
+                let (img, t) = run(*mode, *seed, mpp / div);
+                points.push(ConvergencePoint {
+                    time_s: t,
+                    relmse: render::metrics::relmse(&img, reference)?,
+                });
+            }
+            points.push(ConvergencePoint {
+                time_s: *secs,
+                relmse: render::metrics::relmse(image, reference)?,
+            });
+            convergence.push(ConvergenceSeries {
+                seed: *seed,
+                points,
+            });
+        }
+        let mode_text = match mode {
+            LargeStepMode::Fixed(p) => format!("fixed p_large = {p}"),
+            other => format!("{other:?}"),
+        };
+        methods.push(MethodRun {
+            name: name.clone(),
+            parameters: [("large step".to_string(), mode_text)].into(),
+            images: seed_images,
+            convergence,
+        });
+    }
+    let manifest = RunManifest {
+        title: format!("zsolnai_large_step: {scene}"),
+        commit: current_commit("."),
+        parameters: params
+            .iter()
+            .map(|(k, v)| ((*k).to_string(), v.clone()))
+            .collect(),
+        reference: "reference.exr".into(),
+        methods,
+    };
+    manifest.save(dir)?;
+    Ok(write_report(&manifest, dir, dir.join("report.html"))?)
+}
+
 fn main() {
     let mut size = 64u32;
     let mut mpp = 64u32;
     let mut runs = 3u64;
     let mut names = Vec::new();
+    let mut out_dir = PathBuf::from("out/zsolnai_large_step");
+    let mut report = true;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut num = |what: &str| -> u32 {
@@ -38,6 +128,13 @@ fn main() {
             "--size" => size = num("--size").max(1),
             "--mpp" => mpp = num("--mpp").max(1),
             "--runs" => runs = u64::from(num("--runs").max(1)),
+            "--no-report" => report = false,
+            "--out" => {
+                out_dir = args.next().map(PathBuf::from).unwrap_or_else(|| {
+                    eprintln!("--out needs a directory");
+                    std::process::exit(2)
+                })
+            }
             _ => names.push(a),
         }
     }
@@ -92,12 +189,12 @@ fn main() {
                 continue;
             }
         };
-        let run = |large_step: LargeStepMode, seed: u64| {
+        let run_for = |large_step: LargeStepMode, seed: u64, mpp: u32| {
             let settings = RenderSettings {
                 width: size,
                 height: size,
                 integrator: IntegratorKind::Pssmlt,
-                budget: Budget::SamplesPerPixel(mpp),
+                budget: Budget::SamplesPerPixel(mpp.max(1)),
                 threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
                 seed,
                 max_depth: 5,
@@ -108,19 +205,24 @@ fn main() {
                 },
                 strategy_images: false,
             };
-            render(&scene, &settings, &NoProgress, &AtomicBool::new(false)).expect("render")
+            let start = std::time::Instant::now();
+            let out =
+                render(&scene, &settings, &NoProgress, &AtomicBool::new(false)).expect("render");
+            (out, start.elapsed().as_secs_f64())
         };
+        let run = |large_step: LargeStepMode, seed: u64| run_for(large_step, seed, mpp);
+        // Every method of the report: its name, mode, and final (seed, image, seconds).
+        let mut finals: Vec<MethodFinals> = Vec::new();
         // Automatic control: statistics from the estimation phase (logged in the notes).
         let mut autos = Vec::new();
+        let mut auto_images = Vec::new();
         let mut etas = (0.0, 0.0, 0.0, 0.0);
+        let auto_mode = LargeStepMode::Auto {
+            initial: 0.5,
+            estimation_steps: 1_000,
+        };
         for r in 0..runs {
-            let out = run(
-                LargeStepMode::Auto {
-                    initial: 0.5,
-                    estimation_steps: 1_000,
-                },
-                100 + r,
-            );
+            let (out, secs) = run(auto_mode, 100 + r);
             autos.push(render::metrics::relmse(&out.image, &reference).unwrap_or(f64::NAN));
             if r == 0 {
                 if let Some(note) = out.notes.iter().find(|n| n.starts_with("automatic")) {
@@ -134,24 +236,22 @@ fn main() {
                     etas = (grab("eta_s"), grab("eta_l"), grab("eta_0"), grab("p_large"));
                 }
             }
+            auto_images.push((100 + r, out.image, secs));
         }
+        finals.push(("auto".into(), auto_mode, auto_images));
         let auto = median(autos);
-        let errs: Vec<f64> = sweep
-            .iter()
-            .map(|&p| {
-                median(
-                    (0..runs)
-                        .map(|r| {
-                            render::metrics::relmse(
-                                &run(LargeStepMode::Fixed(p), 100 + r).image,
-                                &reference,
-                            )
-                            .unwrap_or(f64::NAN)
-                        })
-                        .collect(),
-                )
-            })
-            .collect();
+        let mut errs = Vec::new();
+        for &p in &sweep {
+            let mut values = Vec::new();
+            let mut images = Vec::new();
+            for r in 0..runs {
+                let (out, secs) = run(LargeStepMode::Fixed(p), 100 + r);
+                values.push(render::metrics::relmse(&out.image, &reference).unwrap_or(f64::NAN));
+                images.push((100 + r, out.image, secs));
+            }
+            errs.push(median(values));
+            finals.push((format!("p_l={p:.1}"), LargeStepMode::Fixed(p), images));
+        }
         let best = errs
             .iter()
             .enumerate()
@@ -175,6 +275,47 @@ fn main() {
             print!(" {e:.4}{mark} |");
         }
         println!(" {auto:.4} | {:.1} | {rank} of 11 |", sweep[best]);
+        if report {
+            let dir = out_dir.join(&name);
+            let params = [
+                ("scene", name.clone()),
+                ("size", format!("{size}x{size}")),
+                ("mutations per pixel", mpp.to_string()),
+                ("runs (seeds)", runs.to_string()),
+                ("chains", "256".into()),
+                ("max depth", "5".into()),
+                ("bootstrap samples", "20000".into()),
+                ("integrator", "pssmlt over BDPT".into()),
+                (
+                    "auto: measured eta_s, eta_l, eta_0",
+                    format!("{:.3}, {:.3}, {:.3}", etas.0, etas.1, etas.2),
+                ),
+                ("auto: chosen p_l (seed 100)", format!("{:.3}", etas.3)),
+                (
+                    "reference",
+                    format!("{} box-downsampled", reference_path.display()),
+                ),
+                (
+                    "convergence",
+                    "independent runs at 1/8, 1/4, 1/2 and all of the budget".into(),
+                ),
+            ];
+            match write_run(
+                &dir,
+                &name,
+                &params,
+                &reference,
+                &finals,
+                &|mode, seed, m| {
+                    let (out, secs) = run_for(mode, seed, m);
+                    (out.image, secs)
+                },
+                mpp,
+            ) {
+                Ok(html) => eprintln!("{name}: report {}", html.display()),
+                Err(e) => eprintln!("{name}: no report: {e}"),
+            }
+        }
     }
     println!("`*` marks the sweep value nearest the automatic p_l; rank 1 = the automatic run beat every fixed p_l.");
 }

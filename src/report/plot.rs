@@ -30,8 +30,32 @@ pub(crate) fn css_colour(i: usize) -> String {
     format!("rgb({r},{g},{b})")
 }
 
+/// The median over seeds of time and relMSE at each sample index, when every series has the
+/// same number of samples (all positive); empty otherwise.
+fn median_curve(series: &[ConvergenceSeries]) -> Vec<(f64, f64)> {
+    let Some(first) = series.first() else {
+        return Vec::new();
+    };
+    let n = first.points.len();
+    let usable = |s: &ConvergenceSeries| {
+        s.points.len() == n && s.points.iter().all(|p| p.time_s > 0.0 && p.relmse > 0.0)
+    };
+    if !series.iter().all(usable) {
+        return Vec::new();
+    }
+    (0..n)
+        .filter_map(|i| {
+            let times: Vec<f64> = series.iter().map(|s| s.points[i].time_s).collect();
+            let errors: Vec<f64> = series.iter().map(|s| s.points[i].relmse).collect();
+            let (t, _, _) = render::metrics::median_min_max(&times)?;
+            let (e, _, _) = render::metrics::median_min_max(&errors)?;
+            Some((t, e))
+        })
+        .collect()
+}
+
 /// An SVG (without the `xmlns` attribute, for inlining in HTML) plotting relMSE against time on
-/// log-log axes, one line per seed, coloured per method. `None` when no method has a sample
+/// log-log axes, one thin line per seed and a thick median line, coloured per method. `None` when no method has a sample
 /// with positive time and error.
 pub(crate) fn convergence_svg(curves: &[Curves<'_>]) -> Result<Option<String>, String> {
     let positive = |p: &&super::manifest::ConvergencePoint| p.time_s > 0.0 && p.relmse > 0.0;
@@ -70,29 +94,31 @@ pub(crate) fn convergence_svg(curves: &[Curves<'_>]) -> Result<Option<String>, S
             .configure_mesh()
             .x_desc("time [s]")
             .y_desc("relMSE")
-            .x_label_formatter(&|v| format!("{v:.2e}"))
+            .x_label_formatter(&|v| format!("{v:.3}"))
             .y_label_formatter(&|v| format!("{v:.1e}"))
             .draw()
             .map_err(|e| err(&e))?;
         for (i, c) in curves.iter().enumerate() {
             let (r, g, b) = PALETTE[i % PALETTE.len()];
             let colour = RGBColor(r, g, b);
-            for (k, s) in c.series.iter().enumerate() {
+            for s in c.series {
                 let line: Vec<(f64, f64)> = s
                     .points
                     .iter()
                     .filter(positive)
                     .map(|p| (p.time_s, p.relmse))
                     .collect();
-                let drawn = chart
-                    .draw_series(LineSeries::new(line, colour.stroke_width(2)))
+                chart
+                    .draw_series(LineSeries::new(line, colour.mix(0.35).stroke_width(1)))
                     .map_err(|e| err(&e))?;
-                if k == 0 {
-                    drawn.label(c.name).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(3))
-                    });
-                }
             }
+            let median = median_curve(c.series);
+            let drawn = chart
+                .draw_series(LineSeries::new(median, colour.stroke_width(3)).point_size(3))
+                .map_err(|e| err(&e))?;
+            drawn.label(c.name).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(3))
+            });
         }
         chart
             .configure_series_labels()
