@@ -2,7 +2,7 @@
 //!
 //! Written from the formulas (Numerical Recipes, 3rd ed., sections 6.1-6.2; Lanczos 1964), so
 //! that the toy targets' bin probabilities and the chi-square survival function of
-//! [`crate::testing`] need no numerical dependency.
+//! `crate::testing` (feature `testing`) need no numerical dependency.
 
 /// Lanczos coefficients for `g = 7`, `n = 9` (relative accuracy about `1e-15` for `x >= 0.5`).
 const LANCZOS_G: f64 = 7.0;
