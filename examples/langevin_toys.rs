@@ -34,7 +34,7 @@ use mcmc_core::{
     Chain, DifferentiableTarget, Euclidean, FiniteDifference, GaussianRandomWalk, Kernel, Mh,
     NoAdaptation, Proposal, Proposed,
 };
-use rand::{Rng, RngExt, SeedableRng};
+use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use render::image::Image;
 use render::image_io::write_png;

@@ -238,6 +238,29 @@ pub fn relative_error_map(image: &Image, reference: &Image) -> Result<Vec<f32>, 
         .collect())
 }
 
+/// Median, minimum and maximum of `values` (NaNs ordered last by `f64::total_cmp`): the
+/// summary the paper examples report over seeds. `None` for an empty slice.
+///
+/// # Example
+/// ```
+/// assert_eq!(render::metrics::median_min_max(&[3.0, 1.0, 2.0, 10.0]), Some((2.5, 1.0, 10.0)));
+/// ```
+#[must_use]
+pub fn median_min_max(values: &[f64]) -> Option<(f64, f64, f64)> {
+    if values.is_empty() {
+        return None;
+    }
+    let mut s = values.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    let median = if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    };
+    Some((median, s[0], s[n - 1]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -359,27 +382,4 @@ mod tests {
             }
         );
     }
-}
-
-/// Median, minimum and maximum of `values` (NaNs ordered last by `f64::total_cmp`): the
-/// summary the paper examples report over seeds. `None` for an empty slice.
-///
-/// # Example
-/// ```
-/// assert_eq!(render::metrics::median_min_max(&[3.0, 1.0, 2.0, 10.0]), Some((2.5, 1.0, 10.0)));
-/// ```
-#[must_use]
-pub fn median_min_max(values: &[f64]) -> Option<(f64, f64, f64)> {
-    if values.is_empty() {
-        return None;
-    }
-    let mut s = values.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    let median = if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    };
-    Some((median, s[0], s[n - 1]))
 }

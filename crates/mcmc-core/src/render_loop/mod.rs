@@ -31,7 +31,7 @@ mod shared;
 mod splat;
 
 pub use bootstrap::{bootstrap_key, IndependentStates};
-pub use shared::SharedController;
+pub use shared::{Both, SharedController};
 pub use splat::{Splat, SplatGrid, SplatObserver, SplatPayload, SplatSink};
 
 use std::sync::atomic::AtomicBool;

@@ -1,6 +1,7 @@
 //! Statistics that the controllers of all chains share: merged in job order at every round
 //! boundary of the render loop and handed back, so shared adaptation is deterministic.
 
+use crate::controller::Controller;
 use crate::controller::{
     AutoLargeStep, GlobalScale, LargeStepStats, LargeStepTunable, NoAdaptation, RegionalScale,
 };
@@ -63,5 +64,41 @@ impl<K: LargeStepTunable + ?Sized> SharedController<K> for AutoLargeStep {
     }
     fn receive(&mut self, kernel: &mut K, pooled: &LargeStepStats) {
         self.receive_pooled(kernel, pooled);
+    }
+}
+
+/// Two controllers run side by side on one kernel (e.g. automatic large-step control and a
+/// shared gradient cache): both see every step, both contribute to and receive their own part
+/// of the pooled statistics `(A::Shared, B::Shared)`. Frozen when both are.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Both<A, B>(pub A, pub B);
+
+impl<K: ?Sized, S, A: Controller<K, S>, B: Controller<K, S>> Controller<K, S> for Both<A, B> {
+    fn before_step(&mut self, kernel: &K, x: &S) {
+        self.0.before_step(kernel, x);
+        self.1.before_step(kernel, x);
+    }
+    fn after_step(&mut self, kernel: &mut K, info: &crate::StepInfo) {
+        self.0.after_step(kernel, info);
+        self.1.after_step(kernel, info);
+    }
+    fn is_frozen(&self) -> bool {
+        self.0.is_frozen() && self.1.is_frozen()
+    }
+}
+
+impl<K: ?Sized, A: SharedController<K>, B: SharedController<K>> SharedController<K> for Both<A, B> {
+    type Shared = (A::Shared, B::Shared);
+    fn contribute(&mut self, kernel: &mut K, pooled: &mut Self::Shared) {
+        self.0.contribute(kernel, &mut pooled.0);
+        self.1.contribute(kernel, &mut pooled.1);
+    }
+    fn receive(&mut self, kernel: &mut K, pooled: &Self::Shared) {
+        self.0.receive(kernel, &pooled.0);
+        self.1.receive(kernel, &pooled.1);
+    }
+    fn end_round(pooled: &mut Self::Shared) {
+        A::end_round(&mut pooled.0);
+        B::end_round(&mut pooled.1);
     }
 }

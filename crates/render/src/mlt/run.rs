@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use mcmc_core::controller::{AutoLargeStep, LargeStepEstimate, LargeStepStats, LargeStepTunable};
 use mcmc_core::render_loop::{
-    ChainSlot, IndependentStates, LoopBudget, LoopOutput, LoopSettings, RenderLoop,
+    Both, ChainSlot, IndependentStates, LoopBudget, LoopOutput, LoopSettings, RenderLoop,
     SharedController, SplatPayload,
 };
 use mcmc_core::stats::AcceptanceStats;
@@ -211,12 +211,12 @@ where
 }
 
 /// As [`render_mlt`] with a kernel and a controller made per chain (from its
-/// [`ChainSlot`]: chain index and target index, e.g. the MMLT depth) and a fixed large-step
-/// probability: for integrators whose kernel depends on the chain's target (Langevin MLT:
-/// MALA on shallow depths, Kelemen on deep ones) or whose controllers share statistics
-/// through the loop's round hook (a gradient cache). `make_kernel` receives the large-step
-/// probability of `settings.large_step` (its `initial` value for automatic control, which
-/// this function does not run: a note says so).
+/// [`ChainSlot`]: chain index and target index, e.g. the MMLT depth): for integrators whose
+/// kernel depends on the chain's target (Langevin MLT: MALA on shallow depths, Kelemen on deep
+/// ones) or whose controllers share statistics through the loop's round hook (a gradient
+/// cache). `make_kernel` receives the large-step probability; with automatic control
+/// (`LargeStepMode::Auto`) the chains run [`AutoLargeStep::pooled`] *beside* the caller's
+/// controller ([`Both`]), as [`render_mlt`] does.
 pub fn render_mlt_per_chain<T, K, C>(
     targets: &[T],
     make_kernel: impl Fn(ChainSlot, f64) -> K + Sync,
@@ -228,31 +228,65 @@ pub fn render_mlt_per_chain<T, K, C>(
 where
     T: Target<State = PssState>,
     T::Payload: SplatPayload,
-    K: Kernel<T> + Send,
+    K: Kernel<T> + LargeStepTunable + Send,
     C: Controller<K, PssState> + SharedController<K> + Send,
 {
     let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
         .unwrap_or_else(|_| unreachable!("clamped to 1..=4"));
-    let (p, auto) = match settings.large_step {
-        LargeStepMode::Fixed(p) => (p, false),
-        LargeStepMode::Auto { initial, .. } => (initial, true),
-    };
-    let mut result = render_mlt_with_states(
-        targets,
-        &states,
-        |slot: ChainSlot| make_kernel(slot, p),
-        make_controller,
-        settings,
-        progress,
-        cancel,
-    );
-    result.final_large_step_probability = p;
-    if auto {
-        result.notes.push(format!(
-            "automatic large-step control is not run with this integrator: fixed p_large = {p}"
-        ));
+    match settings.large_step {
+        LargeStepMode::Fixed(p) => {
+            let mut result = render_mlt_with_states(
+                targets,
+                &states,
+                |slot: ChainSlot| make_kernel(slot, p),
+                make_controller,
+                settings,
+                progress,
+                cancel,
+            );
+            result.final_large_step_probability = p;
+            result
+        }
+        LargeStepMode::Auto {
+            initial,
+            estimation_steps,
+        } => {
+            let mut loop_settings = loop_settings(settings);
+            let chains = loop_settings.chains;
+            // As render_mlt: at most a tenth of each chain's budget goes to estimation, and
+            // the first round ends when every chain has run its estimation phase.
+            let steps = match loop_settings.budget {
+                LoopBudget::Mutations(n) => estimation_steps.min(n / chains as u64 / 10),
+                LoopBudget::Time(_) => estimation_steps,
+            }
+            .max(1);
+            loop_settings.round_mutations = steps;
+            let total = steps.saturating_mul(chains as u64);
+            let (w, h) = (settings.width, settings.height);
+            let stage_map = settings.stage_map;
+            let out = RenderLoop {
+                targets,
+                states: &states,
+                kernel: |slot: ChainSlot| make_kernel(slot, initial),
+                controller: |slot: ChainSlot| {
+                    Both(
+                        AutoLargeStep::pooled(total).unwrap_or_else(|_| unreachable!("total >= 1")),
+                        make_controller(slot),
+                    )
+                },
+                sink: || StagedSplats::new(w, h, stage_map),
+            }
+            .run(&loop_settings, progress, cancel);
+            finish(
+                out,
+                settings,
+                initial,
+                |pooled: &(LargeStepStats, C::Shared)| {
+                    (pooled.0.steps() >= total).then(|| pooled.0.estimate())
+                },
+            )
+        }
     }
-    result
 }
 
 /// The loop settings of an MCMC render.
