@@ -18,7 +18,9 @@
 //! size), median over the seeds with the min-max range. Also reported: mutations per second,
 //! overall acceptance, and the cost of one step relative to a PSSMLT/K step (the ratio of
 //! mutations per second). Writes `results.md`, `results.csv` and the seed-0 images (EXR and
-//! PNG) of every method to `--out` (default `target/drmlt`).
+//! PNG) of every method to `--out` (default `target/drmlt`), and per scene a run directory
+//! (`<out>/<scene>/`: every seed's EXR, `run.json`) with a self-contained `report.html`
+//! (`chainlight::report`; equal time, so each seed contributes one error-vs-time sample).
 //!
 //! The toy: the mixture of uniforms of eq. 8 (alpha = 1/10, beta = 1), MH with sigma 1 and
 //! 0.1 and Tierney-Mira DR (sigma 1 then 0.1): acceptance, integrated autocorrelation time
@@ -34,6 +36,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+use chainlight::report::{
+    current_commit, write_report, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest,
+    SeedImage,
+};
 use mcmc_core::delayed_rejection::IndependentSecondStage;
 use mcmc_core::render_loop::ChainSlot;
 use mcmc_core::seed::chain_seed;
@@ -453,6 +459,13 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
     let _ = std::fs::create_dir_all(&dir);
     let budget = Budget::Time(Duration::from_secs_f64(o.time));
     let mut runs: Vec<Vec<Run>> = methods.iter().map(|_| Vec::new()).collect();
+    let mut report_methods: Vec<MethodRun> = methods
+        .iter()
+        .map(|m| MethodRun {
+            name: m.label(),
+            ..MethodRun::default()
+        })
+        .collect();
     for seed in 0..o.seeds {
         for (m, method) in methods.iter().enumerate() {
             let (run, image, stage_map) = run_once(&scene, &reference, *method, size, budget, seed);
@@ -464,6 +477,20 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
                 run.mutations_per_second,
                 run.acceptance
             );
+            let file = format!("{}_seed{seed}.exr", method.file_stem());
+            if render::image_io::write_exr(dir.join(&file), &image).is_ok() {
+                report_methods[m].images.push(SeedImage {
+                    seed,
+                    path: file.into(),
+                });
+                report_methods[m].convergence.push(ConvergenceSeries {
+                    seed,
+                    points: vec![ConvergencePoint {
+                        time_s: o.time,
+                        relmse: run.relmse,
+                    }],
+                });
+            }
             if seed == 0 {
                 let stem = dir.join(method.file_stem());
                 let _ = render::image_io::write_exr(stem.with_extension("exr"), &image);
@@ -480,6 +507,7 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
         }
     }
     let _ = render::image_io::write_png(dir.join("reference.png"), &reference, 0.0);
+    write_run_report(o, name, &dir, &reference, report_methods);
     let _ = writeln!(
         md,
         "\n| method | relMSE median [min, max] | MAD median [min, max] | Mmut/s | acceptance | step cost vs PSSMLT/K | relMSE / PSSMLT/K |"
@@ -518,6 +546,47 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
                 r.acceptance
             );
         }
+    }
+}
+
+/// Writes `dir/run.json` and `dir/report.html` for one scene's equal-time runs.
+fn write_run_report(
+    o: &Options,
+    name: &str,
+    dir: &Path,
+    reference: &Image,
+    methods: Vec<MethodRun>,
+) {
+    let result = render::image_io::write_exr(dir.join("reference.exr"), reference)
+        .map_err(|e| e.to_string())
+        .and_then(|()| {
+            let manifest = RunManifest {
+                title: format!("drmlt: {name}"),
+                commit: current_commit("."),
+                parameters: [
+                    ("scene", name.to_string()),
+                    ("size", format!("{0}x{0}", o.size)),
+                    ("time per render [s]", o.time.to_string()),
+                    ("seeds", o.seeds.to_string()),
+                    ("large-step probability", "0.3".into()),
+                    ("max depth", "5".into()),
+                    ("chains", "256".into()),
+                ]
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
+                reference: "reference.exr".into(),
+                methods: methods
+                    .into_iter()
+                    .filter(|m| !m.images.is_empty())
+                    .collect(),
+            };
+            manifest.save(dir).map_err(|e| e.to_string())?;
+            write_report(&manifest, dir, dir.join("report.html")).map_err(|e| e.to_string())
+        });
+    match result {
+        Ok(html) => eprintln!("{name}: report {}", html.display()),
+        Err(e) => eprintln!("{name}: no report: {e}"),
     }
 }
 
