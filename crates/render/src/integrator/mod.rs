@@ -7,8 +7,8 @@ pub mod lqmc;
 pub mod pt;
 pub mod pt_driver;
 pub mod qmc;
-pub mod vertex_path;
 mod table;
+pub mod vertex_path;
 
 pub use table::{IntegratorInfo, IntegratorKind, INTEGRATORS};
 
