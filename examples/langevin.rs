@@ -16,7 +16,9 @@
 //! (`scenes/references/<scene>.exr`, box-downsampled to the render size), median over the
 //! seeds with the min-max range; also mutations per second and acceptance. Writes
 //! `results.md`, `results.csv` and the seed-0 images (EXR and PNG) of every method to `--out`
-//! (default `target/langevin`). docs/methods/mala.md reports a run.
+//! (default `target/langevin`), and per scene a run directory (`<out>/<scene>/`: every seed's
+//! EXR, `run.json`) with a self-contained `report.html` (`chainlight::report`; each seed is one
+//! error-vs-time sample). docs/methods/mala.md reports a run.
 //!
 //! `cargo run --release --example langevin -- [--time 3 | --spp N] [--seeds 5] [--size 64]
 //! [--out DIR] [scene ...]` (`--spp`: equal mutations per pixel instead of equal time, to
@@ -27,6 +29,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+use chainlight::report::{
+    current_commit, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest, SeedImage,
+};
 use render::image::Image;
 use render::metrics::median_min_max;
 use render::mlt::dr::{DrBase, DrVariant};
@@ -189,6 +194,7 @@ struct Run {
     relmse: f64,
     mutations_per_second: f64,
     acceptance: f64,
+    seconds: f64,
 }
 
 /// The overall acceptance rate from the render's notes ("acceptance rate X over N mutations").
@@ -208,6 +214,7 @@ fn run_once(scene: &Scene, reference: &Image, s: &RenderSettings) -> (Run, Image
         relmse: render::metrics::relmse(&out.image, reference).unwrap_or(f64::NAN),
         mutations_per_second: out.samples as f64 / out.elapsed.as_secs_f64(),
         acceptance: acceptance(&out.notes),
+        seconds: out.elapsed.as_secs_f64(),
     };
     (run, out.image)
 }
@@ -243,6 +250,13 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
         None => Budget::Time(Duration::from_secs_f64(o.time)),
     };
     let mut runs: Vec<Vec<Run>> = METHODS.iter().map(|_| Vec::new()).collect();
+    let mut report_methods: Vec<MethodRun> = METHODS
+        .iter()
+        .map(|(label, ..)| MethodRun {
+            name: (*label).to_string(),
+            ..MethodRun::default()
+        })
+        .collect();
     for seed in 0..o.seeds {
         for (m, (label, stem, ..)) in METHODS.iter().enumerate() {
             let (run, image) = run_once(&scene, &reference, &settings(m, size, budget, seed));
@@ -250,6 +264,20 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
                 "{name} seed {seed} {label}: MSE {:.3e}, relMSE {:.4}, {:.0} mut/s, acceptance {:.3}",
                 run.mse, run.relmse, run.mutations_per_second, run.acceptance
             );
+            let file = format!("{stem}_seed{seed}.exr");
+            if render::image_io::write_exr(dir.join(&file), &image).is_ok() {
+                report_methods[m].images.push(SeedImage {
+                    seed,
+                    path: file.into(),
+                });
+                report_methods[m].convergence.push(ConvergenceSeries {
+                    seed,
+                    points: vec![ConvergencePoint {
+                        time_s: run.seconds,
+                        relmse: run.relmse,
+                    }],
+                });
+            }
             if seed == 0 {
                 let path = dir.join(stem);
                 let _ = render::image_io::write_exr(path.with_extension("exr"), &image);
@@ -259,6 +287,39 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
         }
     }
     let _ = render::image_io::write_png(dir.join("reference.png"), &reference, 0.0);
+    let manifest = RunManifest {
+        title: format!("langevin: {name}"),
+        commit: current_commit("."),
+        parameters: [
+            ("scene", name.to_string()),
+            ("size", format!("{size}x{size}")),
+            (
+                "budget",
+                o.spp.map_or_else(
+                    || format!("{} s per render", o.time),
+                    |n| format!("{n} mutations per pixel"),
+                ),
+            ),
+            ("seeds", o.seeds.to_string()),
+            ("large-step probability", "0.3".into()),
+            ("max depth", "5".into()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect(),
+        reference: "reference.exr".into(),
+        methods: report_methods
+            .into_iter()
+            .filter(|m| !m.images.is_empty())
+            .collect(),
+    };
+    let report = render::image_io::write_exr(dir.join("reference.exr"), &reference)
+        .map_err(|e| e.to_string())
+        .and_then(|()| manifest.save_with_report(&dir).map_err(|e| e.to_string()));
+    match report {
+        Ok(html) => eprintln!("{name}: report {}", html.display()),
+        Err(e) => eprintln!("{name}: no report: {e}"),
+    }
     let _ = writeln!(md, "\n### {name}\n");
     let _ = writeln!(
         md,

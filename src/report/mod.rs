@@ -72,6 +72,20 @@ pub enum ReportError {
 }
 
 impl RunManifest {
+    /// Saves `dir/run.json` and writes `dir/report.html` from it: what an example does at the
+    /// end of a run. Returns the report's path.
+    ///
+    /// # Errors
+    /// As [`RunManifest::save`] and [`write_report`].
+    pub fn save_with_report(
+        &self,
+        dir: impl AsRef<std::path::Path>,
+    ) -> Result<PathBuf, ReportError> {
+        let dir = dir.as_ref();
+        self.save(dir)?;
+        write_report(self, dir, dir.join("report.html"))
+    }
+
     /// A manifest comparing loose images with a reference: one method per image, named after
     /// its file stem, seed 0, no convergence samples.
     #[must_use]
