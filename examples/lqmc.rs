@@ -21,7 +21,9 @@
 //! variance of 8 x 8-block means times 64 over the per-pixel variance: 1 for uncorrelated
 //! pixels, more for clumps). Writes `results.md`, `results.csv`,
 //! the seed-0 images of every method (EXR and PNG) and the reference PNG to `--out`
-//! (default `target/lqmc`).
+//! (default `target/lqmc`), and per scene a run directory (`<out>/<scene>/`: every seed's EXR,
+//! `run.json`) with a self-contained `report.html` (`chainlight::report`; each seed is one
+//! error-vs-time sample).
 //!
 //! `cargo run --release --example lqmc -- [--time 2] [--seeds 10] [--size 64] [--out DIR]
 //! [--no-toy] [--no-scenes] [scene ...]`
@@ -31,6 +33,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+use chainlight::report::{
+    current_commit, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest, SeedImage,
+};
 use lqmc::{torus_difference, Rank1Lattice, ShiftedLattice};
 use mcmc_core::seed::mix64;
 use render::image::Image;
@@ -463,6 +468,13 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
     let budget = Budget::Time(Duration::from_secs_f64(o.time));
     let mut runs: Vec<Vec<Run>> = Method::ALL.iter().map(|_| Vec::new()).collect();
     let mut frames: Vec<Vec<Image>> = Method::ALL.iter().map(|_| Vec::new()).collect();
+    let mut report_methods: Vec<MethodRun> = Method::ALL
+        .iter()
+        .map(|m| MethodRun {
+            name: m.label().to_string(),
+            ..MethodRun::default()
+        })
+        .collect();
     for seed in 0..o.seeds {
         for (m, method) in Method::ALL.iter().enumerate() {
             let out = render(
@@ -485,6 +497,20 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
                 run.mad,
                 run.samples_per_second
             );
+            let file = format!("{}_seed{seed}.exr", method.file_stem());
+            if render::image_io::write_exr(dir.join(&file), &out.image).is_ok() {
+                report_methods[m].images.push(SeedImage {
+                    seed,
+                    path: file.into(),
+                });
+                report_methods[m].convergence.push(ConvergenceSeries {
+                    seed,
+                    points: vec![ConvergencePoint {
+                        time_s: out.elapsed.as_secs_f64(),
+                        relmse: run.relmse,
+                    }],
+                });
+            }
             if seed == 0 {
                 let stem = dir.join(method.file_stem());
                 let _ = render::image_io::write_exr(stem.with_extension("exr"), &out.image);
@@ -500,6 +526,31 @@ fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
         }
     }
     let _ = render::image_io::write_png(dir.join("reference.png"), &reference, 0.0);
+    let manifest = RunManifest {
+        title: format!("lqmc: {name}"),
+        commit: current_commit("."),
+        parameters: [
+            ("scene", name.to_string()),
+            ("size", format!("{size}x{size}")),
+            ("time per render [s]", o.time.to_string()),
+            ("seeds", o.seeds.to_string()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect(),
+        reference: "reference.exr".into(),
+        methods: report_methods
+            .into_iter()
+            .filter(|m| !m.images.is_empty())
+            .collect(),
+    };
+    let report = render::image_io::write_exr(dir.join("reference.exr"), &reference)
+        .map_err(|e| e.to_string())
+        .and_then(|()| manifest.save_with_report(&dir).map_err(|e| e.to_string()));
+    match report {
+        Ok(html) => eprintln!("{name}: report {}", html.display()),
+        Err(e) => eprintln!("{name}: no report: {e}"),
+    }
     let _ = writeln!(md, "\n### {name}\n");
     let _ = writeln!(
         md,
