@@ -30,7 +30,7 @@ if [ ! -f node_modules/playwright-core/package.json ]; then
     fi
     # Never download Playwright's own browser builds: the test uses /usr/bin/chromium.
     PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm install --no-save --no-package-lock --no-audit \
-        --no-fund --fetch-retries=1 --fetch-timeout=30000 --prefix . playwright-core@1 >&2
+        --no-fund --fetch-retries=1 --fetch-timeout=30000 --prefix . playwright-core@1.65.1 >&2
 fi
 
 command -v chromium
