@@ -193,6 +193,18 @@ fn report_holds_metrics_maps_plot_parameters_and_no_external_url() {
         find_external_urls(&html)
     );
 
+    // A method name cannot close the embedded data block.
+    let mut hostile = manifest.clone();
+    hostile.methods[0].name = "x</script><!--<script>y".into();
+    let out = write_report(&hostile, &dir, dir.join("hostile.html")).unwrap();
+    let page = std::fs::read_to_string(out).unwrap();
+    assert_eq!(
+        page.matches("</script>").count(),
+        2,
+        "data block and main script only"
+    );
+    assert!(page.contains("x\\u003c/script>"));
+
     // Negative control: the check sees an external image, stylesheet or script.
     for inject in [
         r#"<img src="https://example.org/a.png">"#,

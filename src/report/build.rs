@@ -204,8 +204,9 @@ pub(crate) fn render_html(manifest: &RunManifest, run_dir: &Path) -> Result<Stri
     };
     let data_json = serde_json::to_string(&data)
         .map_err(|e| ReportError::Output(format!("pixel data: {e}")))?
-        // Keep `</script>` in a name from closing the data block.
-        .replace("</", "<\\/");
+        // `<` only occurs inside JSON strings: escaping it keeps `</script>` or `<!--` in a
+        // method name from ending or confusing the data block.
+        .replace('<', "\\u003c");
     let bar: Vec<f32> = (0..256)
         .map(|i| 10f32.powf(-3.0 + 3.0 * i as f32 / 255.0))
         .collect();
