@@ -918,7 +918,10 @@ fn drmlt_flags() {
             "-o",
             path_str(&out),
         ],
-        &["--dr-variant", "tierney-mira, green-mira or orbital"],
+        &[
+            "--dr-variant",
+            "tierney-mira, green-mira, orbital or cheap-then-expensive",
+        ],
     );
     assert_fails_with(
         &[
