@@ -69,6 +69,14 @@ fn bad_flags_are_rejected_with_the_flag_named() {
     assert_fails_with(&["render", "--exposure", "inf"], &["--exposure"]);
     assert_fails_with(&["render", "--seed", "-1"], &["--seed"]);
     assert_fails_with(&["render", "--integrator", "nope"], &["--integrator", "pt"]);
+    assert_fails_with(
+        &["render", "--integrator", "pathmlt", "--adapt", "sideways"],
+        &[
+            "--adapt",
+            "expected fixed, global, grid or quadtree",
+            "sideways",
+        ],
+    );
     assert_fails_with(&["render", "-o", "out.png"], &["--output", ".exr"]);
     assert_fails_with(
         &["render", "-o", "/no/such/dir/out.exr"],

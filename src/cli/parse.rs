@@ -200,6 +200,20 @@ pub(crate) fn perturbation(text: &str) -> Result<pathspace::PerturbationKind, St
     }
 }
 
+/// Parses `--adapt`.
+pub(crate) fn adapt(text: &str) -> Result<render::mlt::pathmlt::PathAdapt, String> {
+    use render::mlt::pathmlt::PathAdapt;
+    match text.trim().to_ascii_lowercase().as_str() {
+        "fixed" => Ok(PathAdapt::Fixed),
+        "global" => Ok(PathAdapt::Global),
+        "grid" => Ok(PathAdapt::Grid),
+        "quadtree" => Ok(PathAdapt::Quadtree),
+        _ => Err(format!(
+            "expected fixed, global, grid or quadtree, got '{text}'"
+        )),
+    }
+}
+
 /// Parses `--dr-on`.
 pub(crate) fn dr_on(text: &str) -> Result<render::mlt::dr::DrBase, String> {
     match text.trim().to_ascii_lowercase().as_str() {

@@ -111,6 +111,12 @@ pub(crate) struct RenderArgs {
     /// section 8.1), `lens` or `multichain`.
     #[arg(long, value_name = "lens|multichain", default_value = "lens", value_parser = parse::perturbation)]
     perturbation: pathspace::PerturbationKind,
+    /// pathmlt: how the perturbation's angular scale is adapted (Otsu et al. 2018): `fixed`
+    /// (0.02 rad), `global` (one adapted scale), `grid` (per cell of a 20 x 20 screen grid;
+    /// multichain: x a 50 x 50 direction grid per cell) or `quadtree` (a refined screen
+    /// quadtree; multichain: a direction quadtree per cell of the 20 x 20 screen grid).
+    #[arg(long, value_name = "fixed|global|grid|quadtree", default_value = "fixed", value_parser = parse::adapt)]
+    adapt: render::mlt::pathmlt::PathAdapt,
     /// mala*: parameter preset, `paper` (Luan et al. 2020, section 7: epsilon 0.01, K 30,
     /// H 10000) or `code` (the authors' code: epsilon 0.005, K 5, H 3000, preconditioner
     /// clamped to [0.01, 100], shrink prior 0.005).
@@ -247,6 +253,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
                 ..render::mlt::mala::MalaConfig::default()
             },
             perturbation: args.perturbation,
+            adapt: args.adapt,
         },
         strategy_images: args.strategy_images,
     }

@@ -47,6 +47,8 @@ pub struct McmcSettings {
     /// Path-space MLT (`pathmlt`): the perturbation mixed with the bidirectional mutation
     /// (default lens).
     pub perturbation: pathspace::PerturbationKind,
+    /// Path-space MLT: how the perturbation's scale is adapted (default fixed).
+    pub adapt: crate::mlt::pathmlt::PathAdapt,
 }
 
 impl Default for McmcSettings {
@@ -60,6 +62,7 @@ impl Default for McmcSettings {
             dr_on: DrBase::Pssmlt,
             mala: MalaConfig::default(),
             perturbation: pathspace::PerturbationKind::Lens,
+            adapt: crate::mlt::pathmlt::PathAdapt::Fixed,
         }
     }
 }

@@ -7,14 +7,20 @@ use std::sync::atomic::AtomicBool;
 use mcmc_core::proposal::Mixture;
 use mcmc_core::render_loop::{IndependentStates, Splat};
 use mcmc_core::{ChainRng, Mh, NoAdaptation, Progress, Target};
+use pathspace::regional::{
+    DirectionPartition, PathPartition, PlanePartition, PooledRegionalStats, RegionalAdaptParams,
+    RegionalSigmas, ScreenPartition, SharedRegionalAdaptation, SharedSigmas,
+};
 use pathspace::{
     ra_mixture, BidirectionalMutation, BidirectionalParams, FixedScale, IndependentSampler, Path,
     PathContribution, PathMutation, PathTarget, PerturbOrGlobal, Perturbation, PerturbationKind,
-    UnidirectionalParams, UnidirectionalSampler,
+    ScaleSource, UnidirectionalParams, UnidirectionalSampler,
 };
 use rand::SeedableRng;
 
-use super::run::{render_mlt_with_states, MltOutput, MltSettings};
+use super::run::{
+    render_mlt_with_states, render_mlt_with_states_rounds, MltBudget, MltOutput, MltSettings,
+};
 use crate::error::RenderError;
 use crate::pathspace_scene::PathSpaceScene;
 
@@ -30,6 +36,52 @@ const DEPTH_RANGE: &str = "0..=63 with --integrator pathmlt";
 /// a fixed kernel needs a local scale: 0.02 rad is about a third of a pixel of a 40 degree,
 /// 16-pixel image and a few pixels at 256 pixels.
 pub const PATHMLT_SIGMA: f64 = 0.02;
+
+/// How pathmlt adapts the perturbation's angular scale (`--adapt`; regional-adaptive paper,
+/// section 8.1, and `docs/methods/regional-adaptive.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PathAdapt {
+    /// FIXED: [`PATHMLT_SIGMA`] everywhere, no adaptation (the default).
+    #[default]
+    Fixed,
+    /// GLOBAL: one adapted scale for all of path space (`PathPartition::Single`).
+    Global,
+    /// RA-GRID: lens, an [`ADAPT_GRID_N`]`^2` screen grid; multi-chain, the 4-D partition with
+    /// an [`ADAPT_GRID_N`]`^2` screen grid and an [`ADAPT_GRID_BOTTOM`]`^2` direction grid per
+    /// cell.
+    Grid,
+    /// RA-QUADTREE: lens, a screen quadtree; multi-chain, an [`ADAPT_GRID_N`]`^2` screen grid
+    /// with a direction quadtree per cell; refined by the budget-scaled `M_split`, `M_refine`.
+    Quadtree,
+}
+
+impl PathAdapt {
+    /// The command-line name.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Fixed => "fixed",
+            Self::Global => "global",
+            Self::Grid => "grid",
+            Self::Quadtree => "quadtree",
+        }
+    }
+}
+
+/// `N` of the lens screen grid and `N_top` of the 4-D partition (the paper's `N_top = 20`,
+/// section 8.1, used for both).
+pub const ADAPT_GRID_N: usize = 20;
+
+/// `N_bottom` of the multi-chain direction grid (the paper's 50).
+pub const ADAPT_GRID_BOTTOM: usize = 50;
+
+/// Deepest quadtree level (screen or direction): cells of `2^-10` of the unit square.
+pub const ADAPT_QUADTREE_DEPTH: u8 = 10;
+
+/// Mutations per chain between two synchronisation points of the render loop when adapting
+/// (the loop's default is 1000): one `lambda` step per region per round, so rounds must be
+/// small for the scales to settle within a render.
+pub const ADAPT_ROUND_MUTATIONS: u64 = 50;
 
 /// The MLT target of path-space MLT on render's film: `pathspace::PathTarget` (`luminance f`)
 /// with its raster position mapped to pixels, one splat per path.
@@ -157,6 +209,37 @@ pub fn mutation<'a>(
     if !(sigma.is_finite() && sigma > 0.0) {
         return Err(RenderError::setting("perturbation sigma", sigma, "> 0"));
     }
+    mutation_with_scale(scene, kind, FixedScale::uniform(sigma), max_depth)
+}
+
+/// The partition of pathmlt's regional adaptation.
+pub type AdaptPartition<'a> = PathPartition<&'a PathSpaceScene<'a>>;
+
+/// The mutation of pathmlt with per-region scales (`--adapt global|grid|quadtree`).
+pub type AdaptiveMutation<'a> = Mixture<
+    PathMutation<
+        Perturbation<'a, PathSpaceScene<'a>, SharedSigmas<AdaptPartition<'a>>>,
+        BidirectionalMutation<'a, PathSpaceScene<'a>>,
+    >,
+    PerturbOrGlobal,
+>;
+
+/// The mutation of pathmlt with the perturbation's scales from `Sc`.
+type ScaledMutation<'a, Sc> = Mixture<
+    PathMutation<
+        Perturbation<'a, PathSpaceScene<'a>, Sc>,
+        BidirectionalMutation<'a, PathSpaceScene<'a>>,
+    >,
+    PerturbOrGlobal,
+>;
+
+/// The mutation of pathmlt with `kind` of perturbation whose scales come from `scale`.
+fn mutation_with_scale<'a, Sc: ScaleSource>(
+    scene: &'a PathSpaceScene<'a>,
+    kind: PerturbationKind,
+    scale: Sc,
+    max_depth: u32,
+) -> Result<ScaledMutation<'a, Sc>, RenderError> {
     let bidirectional = BidirectionalMutation::new(
         scene,
         BidirectionalParams {
@@ -164,7 +247,7 @@ pub fn mutation<'a>(
         },
     )
     .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))?;
-    let perturbation = Perturbation::new(scene, kind, FixedScale::uniform(sigma));
+    let perturbation = Perturbation::new(scene, kind, scale);
     ra_mixture(kind, perturbation, bidirectional)
         .map_err(|e| RenderError::setting("perturbation", e, "lens|multichain"))
 }
@@ -201,6 +284,143 @@ pub fn render(
     ))
 }
 
+/// The regional-adaptation parameters of `--adapt` for a render of `settings`: the paper's
+/// values with `M_refine`, `M_split` scaled to the mutation budget
+/// ([`RegionalAdaptParams::otsu2018_for_budget`]; the paper's own `otsu2018` under a time
+/// budget, whose mutation count is unknown in advance), `lambda_0 = ln(`[`PATHMLT_SIGMA`]`^2)`
+/// (the paper starts every adaptive variant at FIXED's scale, section 8.1; our FIXED is
+/// 0.02 rad, not the paper's `e^{1/2}`), and no refinement except for the quadtree.
+#[must_use]
+pub fn adapt_params(adapt: PathAdapt, settings: &MltSettings) -> RegionalAdaptParams {
+    let mut params = match settings.budget {
+        MltBudget::MutationsPerPixel(m) => {
+            let pixels = (settings.width * settings.height) as f64;
+            RegionalAdaptParams::otsu2018_for_budget((m * pixels).round().max(1.0) as u64)
+        }
+        MltBudget::Time(_) => RegionalAdaptParams::otsu2018(),
+    };
+    params.adapt.lambda_initial = (PATHMLT_SIGMA * PATHMLT_SIGMA).ln();
+    if adapt != PathAdapt::Quadtree {
+        params.split_after_visits = None;
+    }
+    params
+}
+
+/// The partition of `--adapt` for `kind` of perturbation (`None` for FIXED).
+///
+/// # Errors
+/// Never for the constants used (the partitions' own range checks).
+pub fn adapt_partition<'a>(
+    scene: &'a PathSpaceScene<'a>,
+    kind: PerturbationKind,
+    adapt: PathAdapt,
+) -> Result<Option<AdaptPartition<'a>>, RenderError> {
+    let bad = |e: pathspace::PathspaceError| RenderError::setting("adapt", e, "a valid partition");
+    let plane = match adapt {
+        PathAdapt::Fixed => return Ok(None),
+        PathAdapt::Global => return Ok(Some(PathPartition::Single)),
+        PathAdapt::Grid => match kind {
+            PerturbationKind::Lens => PlanePartition::grid(ADAPT_GRID_N),
+            PerturbationKind::MultiChain => PlanePartition::grid(ADAPT_GRID_BOTTOM),
+        },
+        PathAdapt::Quadtree => PlanePartition::quadtree(ADAPT_QUADTREE_DEPTH),
+    }
+    .map_err(bad)?;
+    Ok(Some(match kind {
+        PerturbationKind::Lens => PathPartition::Screen(ScreenPartition::new(scene, plane)),
+        PerturbationKind::MultiChain => PathPartition::Direction(
+            DirectionPartition::new(scene, ADAPT_GRID_N, plane).map_err(bad)?,
+        ),
+    }))
+}
+
+/// As [`render`] with the perturbation's scale adapted by `adapt`: FIXED is [`render`];
+/// the others run [`SharedRegionalAdaptation`] with [`adapt_params`] over
+/// [`adapt_partition`], every chain's perturbation holding a clone of one [`SharedSigmas`],
+/// statistics pooled in job order at the render loop's synchronisation points every
+/// [`ADAPT_ROUND_MUTATIONS`] mutations per chain (bit-identical images for any thread count
+/// under a mutation budget). Notes summarise the learned scales.
+///
+/// # Errors
+/// As [`render`].
+pub fn render_adaptive(
+    scene: &crate::scene::Scene,
+    kind: PerturbationKind,
+    adapt: PathAdapt,
+    max_depth: u32,
+    settings: &MltSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> Result<MltOutput, RenderError> {
+    let view = PathSpaceScene::new(scene)?;
+    let Some(partition) = adapt_partition(&view, kind, adapt)? else {
+        return render(scene, kind, max_depth, settings, progress, cancel);
+    };
+    let sampler = independent_sampler(&view, max_depth)?;
+    let params = adapt_params(adapt, settings);
+    let bad = |e: pathspace::PathspaceError| RenderError::setting("adapt", e, "valid parameters");
+    let sigmas = SharedSigmas::new(
+        RegionalSigmas::new(partition, params.adapt.lambda_initial, 1.0).map_err(bad)?,
+    );
+    let kernel_proto: AdaptiveMutation<'_> = mutation_with_scale(&view, kind, sigmas, max_depth)?;
+    let controller = SharedRegionalAdaptation::new(params).map_err(bad)?;
+    let targets = [PathMltTarget::new(&view, settings.width, settings.height)];
+    let states = IndependentPaths { sampler };
+    let (mut out, pooled) = render_mlt_with_states_rounds(
+        &targets,
+        &states,
+        |_| Mh::new(kernel_proto.clone()),
+        |_| controller.clone(),
+        settings,
+        ADAPT_ROUND_MUTATIONS,
+        progress,
+        cancel,
+    );
+    if let Some(pooled) = pooled {
+        out.notes.push(adapt_summary(adapt, &pooled));
+    }
+    Ok(out)
+}
+
+/// One line on the learned scales: regions, refinements, and `sigma` over the regions that
+/// were updated at least once.
+fn adapt_summary(adapt: PathAdapt, pooled: &PooledRegionalStats<AdaptPartition<'_>>) -> String {
+    let Some(sigmas) = pooled.sigmas() else {
+        return format!("--adapt {}: no synchronisation point reached", adapt.name());
+    };
+    let mut updated: Vec<f64> = (0..pooled.num_regions())
+        .filter(|&k| pooled.region_stats(k).is_some_and(|r| r.adapt.updates > 0))
+        .map(|k| sigmas.get().sigmas_of_region(k)[0])
+        .collect();
+    updated.sort_by(f64::total_cmp);
+    let q = |f: f64| {
+        updated
+            .get(((updated.len() - 1) as f64 * f).round() as usize)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
+    if updated.is_empty() {
+        return format!(
+            "--adapt {}: {} regions, none updated in {} rounds (sigma stays {PATHMLT_SIGMA} rad)",
+            adapt.name(),
+            pooled.num_regions(),
+            pooled.rounds()
+        );
+    }
+    format!(
+        "--adapt {}: {} regions ({} updated), {} rounds, {} refinements, {} splits; learned sigma (rad) min {:.3e}, median {:.3e}, max {:.3e}",
+        adapt.name(),
+        pooled.num_regions(),
+        updated.len(),
+        pooled.rounds(),
+        pooled.refinements(),
+        pooled.splits(),
+        q(0.0),
+        q(0.5),
+        q(1.0)
+    )
+}
+
 /// The render session's pathmlt (`--integrator pathmlt`): [`render`] with the session's MCMC
 /// settings (chains, bootstrap samples, seed, budget, `--perturbation`), its notes in the
 /// output. `scene` must already be at the image size.
@@ -231,9 +451,10 @@ pub fn render_session(
         streams: 1,
         stage_map: false,
     };
-    let out = render(
+    let out = render_adaptive(
         scene,
         m.perturbation,
+        m.adapt,
         settings.max_depth,
         &mlt_settings,
         progress,
@@ -241,10 +462,17 @@ pub fn render_session(
     )?;
     let mut notes = scene.notes.clone();
     notes.push(format!(
-        "path-space MLT: {} perturbation (sigma {PATHMLT_SIGMA} rad) and the bidirectional mutation, 0.5 each; no large steps (--large-step is ignored)",
+        "path-space MLT: {} perturbation (sigma {}) and the bidirectional mutation, 0.5 each; no large steps (--large-step is ignored)",
         match m.perturbation {
             PerturbationKind::Lens => "lens",
             PerturbationKind::MultiChain => "multi-chain",
+        },
+        match m.adapt {
+            PathAdapt::Fixed => format!("{PATHMLT_SIGMA} rad, fixed"),
+            a => format!(
+                "from {PATHMLT_SIGMA} rad, adapted per region: --adapt {}",
+                a.name()
+            ),
         }
     ));
     notes.extend(out.notes.iter().cloned());

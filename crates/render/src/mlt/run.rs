@@ -340,6 +340,48 @@ where
     finish(out, settings, 0.0, |_| None)
 }
 
+/// As [`render_mlt_with_states`] with `round_mutations` mutations per chain between two
+/// synchronisation points of the loop (instead of the loop's default 1000: controllers that
+/// share statistics through the round hook, such as regional adaptation, want small rounds),
+/// also returning the controllers' pooled statistics at the end of the run (`None` if the
+/// loop's settings were invalid).
+#[allow(clippy::too_many_arguments)]
+pub fn render_mlt_with_states_rounds<T, St, K, C>(
+    targets: &[T],
+    states: &St,
+    make_kernel: impl Fn(ChainSlot) -> K + Sync,
+    make_controller: impl Fn(ChainSlot) -> C + Sync,
+    settings: &MltSettings,
+    round_mutations: u64,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> (MltOutput, Option<C::Shared>)
+where
+    T: Target,
+    T::Payload: SplatPayload,
+    St: IndependentStates<T::State>,
+    K: Kernel<T> + Send,
+    C: Controller<K, T::State> + SharedController<K> + Send,
+    C::Shared: Clone,
+{
+    let (w, h) = (settings.width, settings.height);
+    let stage_map = settings.stage_map;
+    let loop_settings = LoopSettings {
+        round_mutations: round_mutations.max(1),
+        ..loop_settings(settings)
+    };
+    let out = RenderLoop {
+        targets,
+        states,
+        kernel: &make_kernel,
+        controller: &make_controller,
+        sink: || StagedSplats::new(w, h, stage_map),
+    }
+    .run(&loop_settings, progress, cancel);
+    let shared = out.as_ref().ok().map(|o| o.shared.clone());
+    (finish(out, settings, 0.0, |_| None), shared)
+}
+
 /// Turns the loop's output into an [`MltOutput`].
 fn finish<Sh>(
     out: Result<LoopOutput<StagedSplats, Sh>, mcmc_core::McmcError>,
