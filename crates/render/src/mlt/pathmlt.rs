@@ -389,7 +389,7 @@ fn adapt_summary(adapt: PathAdapt, pooled: &PooledRegionalStats<AdaptPartition<'
         return format!("--adapt {}: no synchronisation point reached", adapt.name());
     };
     let mut updated: Vec<f64> = (0..pooled.num_regions())
-        .filter(|&k| pooled.region_stats(k).is_some_and(|r| r.adapt.updates > 0))
+        .filter(|&k| pooled.region_stats(k).is_some_and(|r| r.adapt.updates > 1))
         .map(|k| sigmas.get().sigmas_of_region(k)[0])
         .collect();
     updated.sort_by(f64::total_cmp);
