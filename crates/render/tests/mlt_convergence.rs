@@ -39,8 +39,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
 use common::stats::{
-    assert_finite_non_negative, block_means, mean_se, pixel_mean_and_var_of_mean, rounded,
-    t_critical,
+    assert_finite_non_negative, block_t, mean_se, pixel_mean_and_var_of_mean, rounded, t_critical,
 };
 use common::{analytic_enclosure, enclosure_radiance, ENCLOSURE_ALBEDO, ENCLOSURE_LE};
 use glam::{Mat4, Vec3, Vec3A};
@@ -393,19 +392,6 @@ fn reference() -> &'static [Image] {
     })
 }
 
-/// Per block: (t statistic against the reference, MCMC mean, its se, reference mean, its se).
-fn block_t(images: &[Image], reference: &[Image]) -> Vec<[f64; 5]> {
-    let mlt: Vec<Vec<f64>> = images.iter().map(|im| block_means(im, BLOCKS)).collect();
-    let rf: Vec<Vec<f64>> = reference.iter().map(|im| block_means(im, BLOCKS)).collect();
-    (0..BLOCKS * BLOCKS)
-        .map(|k| {
-            let (mm, sm) = mean_se(&mlt.iter().map(|b| b[k]).collect::<Vec<_>>());
-            let (mr, sr) = mean_se(&rf.iter().map(|b| b[k]).collect::<Vec<_>>());
-            [(mm - mr) / sm.hypot(sr), mm, sm, mr, sr]
-        })
-        .collect()
-}
-
 fn cornell_case(method: Method, seed0: u64, mutations_per_pixel: f64) {
     let params = BdptParams {
         max_depth: CORNELL_DEPTH,
@@ -433,7 +419,7 @@ fn cornell_case(method: Method, seed0: u64, mutations_per_pixel: f64) {
     );
 
     // (b) Blocks.
-    let blocks = block_t(&images, reference);
+    let blocks = block_t(&images, reference, BLOCKS);
     let t_blocks: Vec<f64> = blocks.iter().map(|b| b[0]).collect();
     let rel_se: Vec<f64> = blocks
         .iter()
@@ -569,7 +555,10 @@ fn negative_control_wrong_depth_fails_the_block_test() {
             ..BdptParams::default()
         };
         let images = replicates(method, cornell(), params, seed0, 64.0);
-        let t_blocks: Vec<f64> = block_t(&images, reference).iter().map(|b| b[0]).collect();
+        let t_blocks: Vec<f64> = block_t(&images, reference, BLOCKS)
+            .iter()
+            .map(|b| b[0])
+            .collect();
         let worst = t_blocks.iter().map(|t| t.abs()).fold(0.0, f64::max);
         let rejected = t_blocks.iter().filter(|t| t.abs() > crit).count();
         eprintln!(

@@ -11,14 +11,10 @@ mod common;
 use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
-use common::stats::{
-    assert_finite_non_negative, block_means, mean_se, pixel_mean_and_var_of_mean, rounded,
-    t_critical,
-};
+use common::stats::{against_reference, assert_finite_non_negative, block_t, rounded, t_critical};
 use pathspace::PerturbationKind;
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
-use render::metrics::{relmse, RELMSE_EPSILON};
 use render::mlt::pathmlt::{self, PathAdapt};
 use render::mlt::{LargeStepMode, MltBudget, MltSettings};
 use render::scene::Scene;
@@ -126,79 +122,6 @@ fn replicates(
         .collect()
 }
 
-/// Per block: (t statistic against the reference, MCMC mean, its se, reference mean, its se).
-fn block_t(images: &[Image], reference: &[Image]) -> Vec<[f64; 5]> {
-    let mlt: Vec<Vec<f64>> = images.iter().map(|im| block_means(im, BLOCKS)).collect();
-    let rf: Vec<Vec<f64>> = reference.iter().map(|im| block_means(im, BLOCKS)).collect();
-    (0..BLOCKS * BLOCKS)
-        .map(|k| {
-            let (mm, sm) = mean_se(&mlt.iter().map(|b| b[k]).collect::<Vec<_>>());
-            let (mr, sr) = mean_se(&rf.iter().map(|b| b[k]).collect::<Vec<_>>());
-            [(mm - mr) / sm.hypot(sr), mm, sm, mr, sr]
-        })
-        .collect()
-}
-
-/// Image mean and blocks against the reference (as `mlt_convergence.rs`'s `cornell_case`),
-/// plus the relMSE of the replicate average against its expectation under no bias.
-fn against_reference(what: &str, images: &[Image], reference: &[Image]) {
-    let crit = critical();
-    let (mm, sm) = mean_se(&images.iter().map(Image::mean_luminance).collect::<Vec<_>>());
-    let (mr, sr) = mean_se(
-        &reference
-            .iter()
-            .map(Image::mean_luminance)
-            .collect::<Vec<_>>(),
-    );
-    let t_mean = (mm - mr) / sm.hypot(sr);
-    eprintln!(
-        "{what}: mean {mm:.5} (se {sm:.2e} = {:.2}%) reference {mr:.5} (se {sr:.2e}) t {t_mean:.2} \
-         critical {crit:.2}",
-        100.0 * sm / mm
-    );
-    let blocks = block_t(images, reference);
-    let t_blocks: Vec<f64> = blocks.iter().map(|b| b[0]).collect();
-    eprintln!(
-        "{what}: block t {:?}, max |t| {:.2}",
-        rounded(&t_blocks),
-        t_blocks.iter().map(|t| t.abs()).fold(0.0, f64::max)
-    );
-    let (mlt_mean, mlt_var) = pixel_mean_and_var_of_mean(images);
-    let (ref_mean, ref_var) = pixel_mean_and_var_of_mean(reference);
-    let observed = relmse(&mlt_mean, &ref_mean).unwrap();
-    let mut expected = 0.0;
-    for ((v_mlt, v_ref), r) in mlt_var.iter().zip(&ref_var).zip(&ref_mean.pixels) {
-        for c in 0..3 {
-            let r = f64::from(r[c]);
-            expected += (v_mlt[c] + v_ref[c]) / (r * r + RELMSE_EPSILON);
-        }
-    }
-    expected /= (3 * mlt_var.len()) as f64;
-    eprintln!(
-        "{what}: relMSE observed {observed:.3e} expected {expected:.3e} ratio {:.2}",
-        observed / expected
-    );
-    assert!(
-        t_mean.abs() < crit,
-        "{what}: image mean {mm} (se {sm}) vs reference {mr} (se {sr}): t {t_mean}"
-    );
-    for (k, b) in blocks.iter().enumerate() {
-        assert!(
-            b[0].abs() < crit,
-            "{what}: block {k}: {} (se {}) vs reference {} (se {}): t {}, critical {crit}",
-            b[1],
-            b[2],
-            b[3],
-            b[4],
-            b[0]
-        );
-    }
-    assert!(
-        observed < 3.0 * expected + 1e-6,
-        "{what}: relMSE {observed} vs expected {expected}"
-    );
-}
-
 #[test]
 fn quadtree_lens_converges_to_bdpt_on_the_cornell_box() {
     let images = replicates(
@@ -208,13 +131,25 @@ fn quadtree_lens_converges_to_bdpt_on_the_cornell_box() {
         14_000,
         MPP,
     );
-    against_reference("cornell lens quadtree", &images, cornell_reference());
+    against_reference(
+        "cornell lens quadtree",
+        &images,
+        cornell_reference(),
+        BLOCKS,
+        critical(),
+    );
 }
 
 #[test]
 fn grid_lens_converges_to_bdpt_on_the_cornell_box() {
     let images = replicates(PerturbationKind::Lens, PathAdapt::Grid, DEPTH, 15_000, MPP);
-    against_reference("cornell lens grid", &images, cornell_reference());
+    against_reference(
+        "cornell lens grid",
+        &images,
+        cornell_reference(),
+        BLOCKS,
+        critical(),
+    );
 }
 
 #[test]
@@ -226,7 +161,13 @@ fn quadtree_multichain_converges_to_bdpt_on_the_cornell_box() {
         16_000,
         MPP,
     );
-    against_reference("cornell multi-chain quadtree", &images, cornell_reference());
+    against_reference(
+        "cornell multi-chain quadtree",
+        &images,
+        cornell_reference(),
+        BLOCKS,
+        critical(),
+    );
 }
 
 /// Negative control: the quadtree variant at max depth 1 (direct lighting only) against the
@@ -241,7 +182,7 @@ fn negative_control_wrong_depth_fails_the_block_test() {
         256.0,
     );
     let crit = critical();
-    let t_blocks: Vec<f64> = block_t(&images, cornell_reference())
+    let t_blocks: Vec<f64> = block_t(&images, cornell_reference(), BLOCKS)
         .iter()
         .map(|b| b[0])
         .collect();

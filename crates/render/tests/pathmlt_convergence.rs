@@ -15,8 +15,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
 use common::stats::{
-    assert_finite_non_negative, block_means, mean_se, pixel_mean_and_var_of_mean, rounded,
-    t_critical,
+    against_reference, assert_finite_non_negative, block_t, mean_se, rounded, t_critical,
 };
 use common::{analytic_enclosure, enclosure_radiance};
 use mcmc_core::render_loop::IndependentStates;
@@ -24,7 +23,6 @@ use mcmc_core::{Mh, NoAdaptation};
 use pathspace::{Path, PerturbationKind};
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
-use render::metrics::{relmse, RELMSE_EPSILON};
 use render::mlt::pathmlt::{self, IndependentPaths, PathMltTarget};
 use render::mlt::{render_mlt_with_states, LargeStepMode, MltBudget, MltOutput, MltSettings};
 use render::pathspace_scene::PathSpaceScene;
@@ -258,95 +256,40 @@ fn glass_reference() -> &'static [Image] {
     REFERENCE.get_or_init(|| bdpt_reference(glass(), 91_000))
 }
 
-/// Per block: (t statistic against the reference, MCMC mean, its se, reference mean, its se).
-fn block_t(images: &[Image], reference: &[Image]) -> Vec<[f64; 5]> {
-    let mlt: Vec<Vec<f64>> = images.iter().map(|im| block_means(im, BLOCKS)).collect();
-    let rf: Vec<Vec<f64>> = reference.iter().map(|im| block_means(im, BLOCKS)).collect();
-    (0..BLOCKS * BLOCKS)
-        .map(|k| {
-            let (mm, sm) = mean_se(&mlt.iter().map(|b| b[k]).collect::<Vec<_>>());
-            let (mr, sr) = mean_se(&rf.iter().map(|b| b[k]).collect::<Vec<_>>());
-            [(mm - mr) / sm.hypot(sr), mm, sm, mr, sr]
-        })
-        .collect()
-}
-
-/// Image mean and blocks against the reference (as `mlt_convergence.rs`'s `cornell_case`),
-/// plus the relMSE of the replicate average against its expectation under no bias.
-fn against_reference(what: &str, images: &[Image], reference: &[Image]) {
-    let crit = critical();
-    let (mm, sm) = mean_se(&images.iter().map(Image::mean_luminance).collect::<Vec<_>>());
-    let (mr, sr) = mean_se(
-        &reference
-            .iter()
-            .map(Image::mean_luminance)
-            .collect::<Vec<_>>(),
-    );
-    let t_mean = (mm - mr) / sm.hypot(sr);
-    eprintln!(
-        "{what}: mean {mm:.5} (se {sm:.2e} = {:.2}%) reference {mr:.5} (se {sr:.2e}) t {t_mean:.2} \
-         critical {crit:.2}",
-        100.0 * sm / mm
-    );
-    let blocks = block_t(images, reference);
-    let t_blocks: Vec<f64> = blocks.iter().map(|b| b[0]).collect();
-    eprintln!(
-        "{what}: block t {:?}, max |t| {:.2}",
-        rounded(&t_blocks),
-        t_blocks.iter().map(|t| t.abs()).fold(0.0, f64::max)
-    );
-    let (mlt_mean, mlt_var) = pixel_mean_and_var_of_mean(images);
-    let (ref_mean, ref_var) = pixel_mean_and_var_of_mean(reference);
-    let observed = relmse(&mlt_mean, &ref_mean).unwrap();
-    let mut expected = 0.0;
-    for ((v_mlt, v_ref), r) in mlt_var.iter().zip(&ref_var).zip(&ref_mean.pixels) {
-        for c in 0..3 {
-            let r = f64::from(r[c]);
-            expected += (v_mlt[c] + v_ref[c]) / (r * r + RELMSE_EPSILON);
-        }
-    }
-    expected /= (3 * mlt_var.len()) as f64;
-    eprintln!(
-        "{what}: relMSE observed {observed:.3e} expected {expected:.3e} ratio {:.2}",
-        observed / expected
-    );
-    assert!(
-        t_mean.abs() < crit,
-        "{what}: image mean {mm} (se {sm}) vs reference {mr} (se {sr}): t {t_mean}"
-    );
-    for (k, b) in blocks.iter().enumerate() {
-        assert!(
-            b[0].abs() < crit,
-            "{what}: block {k}: {} (se {}) vs reference {} (se {}): t {}, critical {crit}",
-            b[1],
-            b[2],
-            b[3],
-            b[4],
-            b[0]
-        );
-    }
-    assert!(
-        observed < 3.0 * expected + 1e-6,
-        "{what}: relMSE {observed} vs expected {expected}"
-    );
-}
-
 #[test]
 fn pathmlt_lens_converges_to_bdpt_on_the_cornell_box() {
     let images = replicates(cornell(), PerturbationKind::Lens, DEPTH, 4000, MPP);
-    against_reference("cornell lens", &images, cornell_reference());
+    against_reference(
+        "cornell lens",
+        &images,
+        cornell_reference(),
+        BLOCKS,
+        critical(),
+    );
 }
 
 #[test]
 fn pathmlt_multichain_converges_to_bdpt_on_the_cornell_box() {
     let images = replicates(cornell(), PerturbationKind::MultiChain, DEPTH, 5000, MPP);
-    against_reference("cornell multi-chain", &images, cornell_reference());
+    against_reference(
+        "cornell multi-chain",
+        &images,
+        cornell_reference(),
+        BLOCKS,
+        critical(),
+    );
 }
 
 #[test]
 fn pathmlt_multichain_converges_to_bdpt_on_the_glass_cornell_box() {
     let images = replicates(glass(), PerturbationKind::MultiChain, DEPTH, 6000, MPP);
-    against_reference("glass cornell multi-chain", &images, glass_reference());
+    against_reference(
+        "glass cornell multi-chain",
+        &images,
+        glass_reference(),
+        BLOCKS,
+        critical(),
+    );
 }
 
 /// Negative control: pathmlt at max depth 1 (direct lighting only) against the depth-5
@@ -355,7 +298,7 @@ fn pathmlt_multichain_converges_to_bdpt_on_the_glass_cornell_box() {
 fn negative_control_wrong_depth_fails_the_block_test() {
     let images = replicates(cornell(), PerturbationKind::Lens, 1, 7000, 256.0);
     let crit = critical();
-    let t_blocks: Vec<f64> = block_t(&images, cornell_reference())
+    let t_blocks: Vec<f64> = block_t(&images, cornell_reference(), BLOCKS)
         .iter()
         .map(|b| b[0])
         .collect();

@@ -2,6 +2,7 @@
 //! the exact Student t distribution, means with standard errors, block and pixel statistics.
 
 use render::image::Image;
+use render::metrics::{relmse, RELMSE_EPSILON};
 
 /// `P(|T| >= t)` for Student's t with `df >= 1` degrees of freedom, exact for integer `df`
 /// (Abramowitz & Stegun 26.7.3 for odd, 26.7.4 for even `df`; `theta = atan(t / sqrt(df))`).
@@ -103,4 +104,83 @@ pub fn pixel_mean_and_var_of_mean(images: &[Image]) -> (Image, Vec<[f64; 3]>) {
 
 pub fn rounded(xs: &[f64]) -> Vec<f64> {
     xs.iter().map(|x| (x * 100.0).round() / 100.0).collect()
+}
+
+/// Per block: (t statistic against the reference, MCMC mean, its se, reference mean, its se).
+pub fn block_t(images: &[Image], reference: &[Image], blocks: usize) -> Vec<[f64; 5]> {
+    let mlt: Vec<Vec<f64>> = images.iter().map(|im| block_means(im, blocks)).collect();
+    let rf: Vec<Vec<f64>> = reference.iter().map(|im| block_means(im, blocks)).collect();
+    (0..blocks * blocks)
+        .map(|k| {
+            let (mm, sm) = mean_se(&mlt.iter().map(|b| b[k]).collect::<Vec<_>>());
+            let (mr, sr) = mean_se(&rf.iter().map(|b| b[k]).collect::<Vec<_>>());
+            [(mm - mr) / sm.hypot(sr), mm, sm, mr, sr]
+        })
+        .collect()
+}
+
+/// Image mean and `blocks x blocks` block means of MCMC replicates against reference
+/// replicates (Welch t, critical value `crit`), plus the relMSE of the replicate average
+/// against its expectation under no bias (`< 3x`; see `mlt_convergence.rs`'s `cornell_case`).
+pub fn against_reference(
+    what: &str,
+    images: &[Image],
+    reference: &[Image],
+    blocks: usize,
+    crit: f64,
+) {
+    let (mm, sm) = mean_se(&images.iter().map(Image::mean_luminance).collect::<Vec<_>>());
+    let (mr, sr) = mean_se(
+        &reference
+            .iter()
+            .map(Image::mean_luminance)
+            .collect::<Vec<_>>(),
+    );
+    let t_mean = (mm - mr) / sm.hypot(sr);
+    eprintln!(
+        "{what}: mean {mm:.5} (se {sm:.2e} = {:.2}%) reference {mr:.5} (se {sr:.2e}) t {t_mean:.2} \
+         critical {crit:.2}",
+        100.0 * sm / mm
+    );
+    let block_stats = block_t(images, reference, blocks);
+    let t_blocks: Vec<f64> = block_stats.iter().map(|b| b[0]).collect();
+    eprintln!(
+        "{what}: block t {:?}, max |t| {:.2}",
+        rounded(&t_blocks),
+        t_blocks.iter().map(|t| t.abs()).fold(0.0, f64::max)
+    );
+    let (mlt_mean, mlt_var) = pixel_mean_and_var_of_mean(images);
+    let (ref_mean, ref_var) = pixel_mean_and_var_of_mean(reference);
+    let observed = relmse(&mlt_mean, &ref_mean).unwrap();
+    let mut expected = 0.0;
+    for ((v_mlt, v_ref), r) in mlt_var.iter().zip(&ref_var).zip(&ref_mean.pixels) {
+        for c in 0..3 {
+            let r = f64::from(r[c]);
+            expected += (v_mlt[c] + v_ref[c]) / (r * r + RELMSE_EPSILON);
+        }
+    }
+    expected /= (3 * mlt_var.len()) as f64;
+    eprintln!(
+        "{what}: relMSE observed {observed:.3e} expected {expected:.3e} ratio {:.2}",
+        observed / expected
+    );
+    assert!(
+        t_mean.abs() < crit,
+        "{what}: image mean {mm} (se {sm}) vs reference {mr} (se {sr}): t {t_mean}"
+    );
+    for (k, b) in block_stats.iter().enumerate() {
+        assert!(
+            b[0].abs() < crit,
+            "{what}: block {k}: {} (se {}) vs reference {} (se {}): t {}, critical {crit}",
+            b[1],
+            b[2],
+            b[3],
+            b[4],
+            b[0]
+        );
+    }
+    assert!(
+        observed < 3.0 * expected + 1e-6,
+        "{what}: relMSE {observed} vs expected {expected}"
+    );
 }
