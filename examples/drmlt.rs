@@ -412,21 +412,10 @@ fn stage_table(scene: &Scene, name: &str, size: u32, md: &mut String) {
 /// Runs every method on scene `name`; appends its table to `md` and its runs to `csv`.
 fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
     let size = o.size;
-    let reference_path = Path::new("scenes/references").join(format!("{name}.exr"));
-    let Some(reference) = render::image_io::read_exr(&reference_path)
-        .ok()
-        .and_then(|r| r.box_downsample(size as usize, size as usize))
-    else {
-        eprintln!(
-            "{name}: no usable reference at {} (run scripts/make_references.sh); skipped",
-            reference_path.display()
-        );
-        return;
-    };
-    let scene = match Scene::load(&Path::new("scenes").join(format!("{name}.gltf"))) {
-        Ok(s) => s,
+    let (scene, reference) = match render::bundled::bundled(name, size) {
+        Ok(pair) => pair,
         Err(e) => {
-            eprintln!("{name}: {e}");
+            eprintln!("{e}; skipped");
             return;
         }
     };

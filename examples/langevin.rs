@@ -25,7 +25,7 @@
 //! separate a method's cost per mutation from its efficiency per mutation).
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
@@ -225,21 +225,10 @@ fn summary(v: &[f64]) -> (f64, f64, f64) {
 
 fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
     let size = o.size;
-    let reference_path = Path::new("scenes/references").join(format!("{name}.exr"));
-    let Some(reference) = render::image_io::read_exr(&reference_path)
-        .ok()
-        .and_then(|r| r.box_downsample(size as usize, size as usize))
-    else {
-        eprintln!(
-            "{name}: no usable reference at {} (the size must divide the reference's); skipped",
-            reference_path.display()
-        );
-        return;
-    };
-    let scene = match Scene::load(&Path::new("scenes").join(format!("{name}.gltf"))) {
-        Ok(s) => s,
+    let (scene, reference) = match render::bundled::bundled(name, size) {
+        Ok(pair) => pair,
         Err(e) => {
-            eprintln!("{name}: {e}");
+            eprintln!("{e}; skipped");
             return;
         }
     };

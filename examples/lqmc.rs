@@ -39,7 +39,6 @@ use chainlight::report::{
 use lqmc::{torus_difference, Rank1Lattice, ShiftedLattice};
 use mcmc_core::seed::mix64;
 use render::image::Image;
-use render::scene::Scene;
 use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
 
 /// Command-line options.
@@ -445,21 +444,10 @@ fn block_variance_ratio(images: &[Image]) -> f64 {
 
 fn run_scene(o: &Options, name: &str, md: &mut String, csv: &mut String) {
     let size = o.size;
-    let reference_path = Path::new("scenes/references").join(format!("{name}.exr"));
-    let Some(reference) = render::image_io::read_exr(&reference_path)
-        .ok()
-        .and_then(|r| r.box_downsample(size as usize, size as usize))
-    else {
-        eprintln!(
-            "{name}: no usable reference at {}; skipped",
-            reference_path.display()
-        );
-        return;
-    };
-    let scene = match Scene::load(&Path::new("scenes").join(format!("{name}.gltf"))) {
-        Ok(s) => s,
+    let (scene, reference) = match render::bundled::bundled(name, size) {
+        Ok(pair) => pair,
         Err(e) => {
-            eprintln!("{name}: {e}");
+            eprintln!("{e}; skipped");
             return;
         }
     };

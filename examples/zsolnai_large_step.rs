@@ -25,7 +25,6 @@ use chainlight::report::{
 };
 use render::image::Image;
 use render::mlt::LargeStepMode;
-use render::scene::Scene;
 use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -172,20 +171,10 @@ fn main() {
             .to_string_lossy()
             .into_owned();
         let reference_path = Path::new("scenes/references").join(format!("{name}.exr"));
-        let Some(reference) = render::image_io::read_exr(&reference_path)
-            .ok()
-            .and_then(|r| r.box_downsample(size as usize, size as usize))
-        else {
-            eprintln!(
-                "{name}: no usable reference at {} (run scripts/make_references.sh); skipped",
-                reference_path.display()
-            );
-            continue;
-        };
-        let scene = match Scene::load(&path) {
-            Ok(s) => s,
+        let (scene, reference) = match render::bundled::scene_and_reference(&path, size) {
+            Ok(pair) => pair,
             Err(e) => {
-                eprintln!("{name}: {e}");
+                eprintln!("{e}; skipped");
                 continue;
             }
         };

@@ -38,6 +38,7 @@
 
 pub mod bdpt;
 pub mod budget;
+pub mod bundled;
 pub mod bvh;
 pub mod camera;
 pub mod error;
