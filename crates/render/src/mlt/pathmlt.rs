@@ -352,18 +352,43 @@ pub fn render_adaptive(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<MltOutput, RenderError> {
+    let params = adapt_params(adapt, settings);
+    render_adaptive_with_params(
+        scene, kind, adapt, max_depth, settings, &params, progress, cancel,
+    )
+    .map(|(out, _)| out)
+}
+
+/// As [`render_adaptive`] with the given regional-adaptation `params` (used as given, e.g.
+/// [`adapt_params`] with `M_refine`, `M_split` scaled to an expected mutation count under a
+/// time budget), also returning the learned scale over the screen: `sigma_1` per pixel of the
+/// `settings.width x settings.height` image (`RegionalSigmas::screen_sigma_map`, row-major;
+/// `None` for FIXED or if no synchronisation point was reached).
+///
+/// # Errors
+/// As [`render`], and for invalid `params`.
+#[allow(clippy::too_many_arguments)]
+pub fn render_adaptive_with_params(
+    scene: &crate::scene::Scene,
+    kind: PerturbationKind,
+    adapt: PathAdapt,
+    max_depth: u32,
+    settings: &MltSettings,
+    params: &RegionalAdaptParams,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> Result<(MltOutput, Option<Vec<f64>>), RenderError> {
     let view = PathSpaceScene::new(scene)?;
     let Some(partition) = adapt_partition(&view, kind, adapt)? else {
-        return render(scene, kind, max_depth, settings, progress, cancel);
+        return render(scene, kind, max_depth, settings, progress, cancel).map(|out| (out, None));
     };
     let sampler = independent_sampler(&view, max_depth)?;
-    let params = adapt_params(adapt, settings);
     let bad = |e: pathspace::PathspaceError| RenderError::setting("adapt", e, "valid parameters");
     let sigmas = SharedSigmas::new(
         RegionalSigmas::new(partition, params.adapt.lambda_initial, 1.0).map_err(bad)?,
     );
     let kernel_proto: AdaptiveMutation<'_> = mutation_with_scale(&view, kind, sigmas, max_depth)?;
-    let controller = SharedRegionalAdaptation::new(params).map_err(bad)?;
+    let controller = SharedRegionalAdaptation::new(*params).map_err(bad)?;
     let targets = [PathMltTarget::new(&view, settings.width, settings.height)];
     let states = IndependentPaths { sampler };
     let (mut out, pooled) = render_mlt_with_states_rounds(
@@ -376,10 +401,14 @@ pub fn render_adaptive(
         progress,
         cancel,
     );
+    let map = pooled.as_ref().and_then(|p| {
+        p.sigmas()
+            .map(|s| s.get().screen_sigma_map(settings.width, settings.height))
+    });
     if let Some(pooled) = pooled {
         out.notes.push(adapt_summary(adapt, &pooled));
     }
-    Ok(out)
+    Ok((out, map))
 }
 
 /// One line on the learned scales: regions, refinements, and `sigma` over the regions that
