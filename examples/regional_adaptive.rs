@@ -20,7 +20,7 @@
 //! (`scenes/references/<scene>.exr`, box-downsampled), median over the seeds with the min-max
 //! range, mutations per second, acceptance, the median learned sigma over the pixels. Then,
 //! for `--ladder-scene` (default glossy-diffuse), an rRMSE-vs-time ladder (`--ladder`, default
-//! 1,4,15,60 s, `--ladder-seeds` seeds, default 2; interleaved for seed: for time: for
+//! 1,4,15,60 s, `--ladder-seeds` seeds, default 3; interleaved for seed: for time: for
 //! configuration) drawn as a log-log SVG (the paper's Fig. 10).
 //!
 //! Writes to `--out` (default `target/regional_adaptive`): `results.md`, `results.csv`,
@@ -31,7 +31,7 @@
 //! and a self-contained `report.html`. docs/methods/regional-adaptive.md reports a run.
 //!
 //! `cargo run --release --example regional_adaptive -- [--time 5] [--seeds 5] [--size 64]
-//! [--threads 1] [--ladder 1,4,15,60] [--ladder-seeds 2] [--ladder-scene glossy-diffuse]
+//! [--threads 1] [--ladder 1,4,15,60] [--ladder-seeds 3] [--ladder-scene glossy-diffuse]
 //! [--out DIR] [--quick] [scene ...]`; `--quick` is a smoke run (0.5 s, 2 seeds, 32 x 32,
 //! ladder 0.25,0.5 s with 1 seed; later flags override it).
 
@@ -87,7 +87,7 @@ fn parse_options() -> Options {
         size: 64,
         threads: 1,
         ladder: vec![1.0, 4.0, 15.0, 60.0],
-        ladder_seeds: 2,
+        ladder_seeds: 3,
         ladder_scene: "glossy-diffuse".into(),
         out: PathBuf::from("target/regional_adaptive"),
         scenes: Vec::new(),
