@@ -1,10 +1,12 @@
 //! Regional adaptive path-space MLT (`--integrator pathmlt --adapt global|grid|quadtree`,
 //! `render::mlt::pathmlt::render_adaptive`): the image is bit-identical for 1, 2 and 3
 //! threads under a mutation budget for every `--adapt` mode (statistics shared in job order
-//! through the render loop's round hook), and the quadtree and grid variants converge to the
-//! BDPT reference on the Cornell box with `pathmlt_convergence.rs`'s replicate statistics
-//! (Welch's t on the image mean and 4 x 4 blocks, Bonferroni over this file's comparisons);
-//! negative control: the quadtree variant at max depth 1 fails the block test.
+//! through the render loop's round hook), and every adaptive mode (global, grid, quadtree) of
+//! both perturbations converges to the BDPT reference on the Cornell box (`fixed` is
+//! `pathmlt::render`, tested by `pathmlt_convergence.rs`) with `pathmlt_convergence.rs`'s
+//! replicate statistics (Welch's t on the image mean and 4 x 4 blocks, Bonferroni over this
+//! file's comparisons); negative control: the quadtree variant at max depth 1 fails the block
+//! test.
 
 mod common;
 
@@ -35,8 +37,9 @@ const DEPTH: u32 = 5;
 const REF_SPP: u32 = 256;
 /// pathmlt mutations per pixel.
 const MPP: f64 = 1024.0;
-/// Comparisons: image mean and blocks for lens quadtree, lens grid, multi-chain quadtree.
-const N_COMPARISONS: usize = 3 * (1 + BLOCKS * BLOCKS);
+/// Comparisons: image mean and blocks for lens quadtree, grid, global and multi-chain
+/// quadtree, grid, global.
+const N_COMPARISONS: usize = 6 * (1 + BLOCKS * BLOCKS);
 
 fn critical() -> f64 {
     t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R.min(K) - 1) as u32)
@@ -163,6 +166,60 @@ fn quadtree_multichain_converges_to_bdpt_on_the_cornell_box() {
     );
     against_reference(
         "cornell multi-chain quadtree",
+        &images,
+        cornell_reference(),
+        BLOCKS,
+        critical(),
+    );
+}
+
+#[test]
+fn global_lens_converges_to_bdpt_on_the_cornell_box() {
+    let images = replicates(
+        PerturbationKind::Lens,
+        PathAdapt::Global,
+        DEPTH,
+        18_000,
+        MPP,
+    );
+    against_reference(
+        "cornell lens global",
+        &images,
+        cornell_reference(),
+        BLOCKS,
+        critical(),
+    );
+}
+
+#[test]
+fn grid_multichain_converges_to_bdpt_on_the_cornell_box() {
+    let images = replicates(
+        PerturbationKind::MultiChain,
+        PathAdapt::Grid,
+        DEPTH,
+        19_000,
+        MPP,
+    );
+    against_reference(
+        "cornell multi-chain grid",
+        &images,
+        cornell_reference(),
+        BLOCKS,
+        critical(),
+    );
+}
+
+#[test]
+fn global_multichain_converges_to_bdpt_on_the_cornell_box() {
+    let images = replicates(
+        PerturbationKind::MultiChain,
+        PathAdapt::Global,
+        DEPTH,
+        20_000,
+        MPP,
+    );
+    against_reference(
+        "cornell multi-chain global",
         &images,
         cornell_reference(),
         BLOCKS,
