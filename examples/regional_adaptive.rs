@@ -371,8 +371,8 @@ fn run_table(o: &Options, pool: &rayon::ThreadPool) -> Vec<SceneRuns> {
         for s in &mut scenes {
             let dir = o.out.join(&s.name);
             let mut fixed_mutations = None;
-            for c in 0..CONFIGS.len() {
-                if CONFIGS[c].1 == PathAdapt::Fixed {
+            for (c, &(_, adapt)) in CONFIGS.iter().enumerate() {
+                if adapt == PathAdapt::Fixed {
                     fixed_mutations = None;
                 }
                 let r = run_once(
@@ -384,7 +384,7 @@ fn run_table(o: &Options, pool: &rayon::ThreadPool) -> Vec<SceneRuns> {
                     seed,
                     fixed_mutations,
                 );
-                if CONFIGS[c].1 == PathAdapt::Fixed {
+                if adapt == PathAdapt::Fixed {
                     fixed_mutations = Some(r.run.mutations);
                 }
                 eprintln!(
@@ -494,7 +494,7 @@ fn table_markdown(o: &Options, s: &SceneRuns, md: &mut String, csv: &mut String)
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|");
     let col = |c: usize, f: fn(&Run) -> f64| summary(&s.runs[c].iter().map(f).collect::<Vec<_>>());
-    for c in 0..CONFIGS.len() {
+    for (c, &(kind, adapt)) in CONFIGS.iter().enumerate() {
         let fixed = c - c % 4;
         let (e, e0, e1) = col(c, |r| r.rrmse);
         let q = col(c, |r| r.relmse).0;
@@ -518,8 +518,8 @@ fn table_markdown(o: &Options, s: &SceneRuns, md: &mut String, csv: &mut String)
                 csv,
                 "{},{},{},{seed},{},{},{},{},{},{},{},{}",
                 s.name,
-                perturbation_name(CONFIGS[c].0),
-                CONFIGS[c].1.name(),
+                perturbation_name(kind),
+                adapt.name(),
                 o.time,
                 r.rrmse,
                 r.relmse,
