@@ -672,6 +672,8 @@ fn plot_ladder(path: &Path, scene: &str, curves: &[Vec<(f64, f64)>]) -> Result<(
         .map_err(|e| err(&e))?;
     chart
         .configure_mesh()
+        .x_labels(12)
+        .y_labels(12)
         .x_desc("time [s]")
         .y_desc("rRMSE")
         .x_label_formatter(&|v| format!("{v:.3}"))
