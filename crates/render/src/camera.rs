@@ -130,6 +130,29 @@ impl CameraPose {
     }
 }
 
+/// Everything that defines a [`Camera`] (see [`Camera::params`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CameraParams {
+    /// Start pose `(from, to, up)`.
+    pub(crate) start: (Vec3A, Vec3A, Vec3A),
+    /// End pose `(from, to)` (the up vector is shared).
+    pub(crate) end: (Vec3A, Vec3A),
+    /// True if the poses differ.
+    pub(crate) moving: bool,
+    /// The start pose's frame.
+    pub(crate) pose: CameraPose,
+    /// Shutter interval.
+    pub(crate) shutter: (f32, f32),
+    /// Image size in pixels.
+    pub(crate) size: (u32, u32),
+    /// Film half-size at `z = 1`.
+    pub(crate) half: (f32, f32),
+    /// Lens radius (0: pinhole).
+    pub(crate) lens_radius: f32,
+    /// Focus distance.
+    pub(crate) focus_distance: f32,
+}
+
 /// A look-at triple, interpolated for camera motion.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct LookAt {
@@ -270,6 +293,23 @@ impl Camera {
             self.shutter_close = open.max(close);
         }
         self
+    }
+
+    /// The camera's parameters, for code that restates its maths over another scalar type
+    /// (the differentiable path evaluator, [`crate::bdpt::diff`]).
+    #[must_use]
+    pub(crate) fn params(&self) -> CameraParams {
+        CameraParams {
+            start: (self.start.from, self.start.to, self.start.up),
+            end: (self.end.from, self.end.to),
+            moving: self.moving,
+            pose: self.pose,
+            shutter: (self.shutter_open, self.shutter_close),
+            size: (self.width, self.height),
+            half: (self.half_width, self.half_height),
+            lens_radius: self.lens_radius,
+            focus_distance: self.focus_distance,
+        }
     }
 
     /// Image width in pixels.

@@ -15,7 +15,7 @@
 //! | drivers | [`integrator::pt_driver`], [`bdpt::render_bdpt`], [`mlt`] |
 //! | integrators | [`integrator::pt`], [`bdpt`] (subpaths, connections, MIS) |
 //! | scene | [`scene`], [`camera`], [`light`], [`material`], [`bvh`], [`mesh`] |
-//! | foundations | [`sampler`], [`film`], [`image`], [`image_io`], [`metrics`], [`budget`], [`frame`], [`warp`], [`error`] |
+//! | foundations | [`autodiff`], [`sampler`], [`film`], [`image`], [`image_io`], [`metrics`], [`budget`], [`frame`], [`warp`], [`error`] |
 //!
 //! # Example
 //! ```
@@ -36,6 +36,7 @@
 //! assert!(!out.cancelled && out.image.mean_luminance() > 0.0);
 //! ```
 
+pub mod autodiff;
 pub mod bdpt;
 pub mod budget;
 pub mod bundled;

@@ -8,6 +8,7 @@
 //! are computed from per-vertex forward/reverse area densities without re-tracing.
 
 mod connect;
+pub mod diff;
 mod render;
 mod scene_api;
 mod subpath;

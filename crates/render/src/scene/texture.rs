@@ -5,6 +5,19 @@
 
 use glam::{Vec2, Vec3};
 
+/// What a texture lookup blends ([`Texture::footprint`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Footprint {
+    /// Texels `[t00, t10, t01, t11]` (all four the same for nearest lookup).
+    pub(crate) texels: [Vec3; 4],
+    /// Texel-space origin `(x0, y0)` of the bilinear cell.
+    pub(crate) origin: [f64; 2],
+    /// Texture size `(width, height)`.
+    pub(crate) size: [f64; 2],
+    /// False for nearest lookup.
+    pub(crate) bilinear: bool,
+}
+
 /// How texture coordinates outside `[0, 1]` are mapped back (glTF `sampler.wrapS/wrapT`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum WrapMode {
@@ -183,6 +196,43 @@ impl Texture {
         let x = Self::wrap(x, self.width, self.wrap_s);
         let y = Self::wrap(y, self.height, self.wrap_t);
         y * self.width + x
+    }
+
+    /// The texels and texel-space origin a lookup at `uv` blends, for code that restates the
+    /// bilinear filter over another scalar type (`crate::bdpt::diff`): the colour is
+    /// `lerp(lerp(t00, t10, fx), lerp(t01, t11, fx), fy)` with `fx = uv.x * width - 0.5 - x0`,
+    /// `fy = uv.y * height - 0.5 - y0` (bilinear), or `t00` (nearest). `None` for coordinates
+    /// the lookup reduces by whole periods (`|uv| > 1e6`) or non-finite ones.
+    #[must_use]
+    pub(crate) fn footprint(&self, uv: Vec2) -> Option<Footprint> {
+        if !uv.is_finite() || uv.abs().max_element() > 1e6 {
+            return None;
+        }
+        let x = uv.x * self.width as f32;
+        let y = uv.y * self.height as f32;
+        let at = |x: i64, y: i64| self.texels[self.index(x, y)];
+        let size = [self.width as f64, self.height as f64];
+        Some(match self.filter {
+            TextureFilter::Nearest => {
+                let t = at(x.floor() as i64, y.floor() as i64);
+                Footprint {
+                    texels: [t; 4],
+                    origin: [0.0; 2],
+                    size,
+                    bilinear: false,
+                }
+            }
+            TextureFilter::Bilinear => {
+                let (x0, y0) = ((x - 0.5).floor(), (y - 0.5).floor());
+                let (i, j) = (x0 as i64, y0 as i64);
+                Footprint {
+                    texels: [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)],
+                    origin: [f64::from(x0), f64::from(y0)],
+                    size,
+                    bilinear: true,
+                }
+            }
+        })
     }
 
     /// The texture value at `uv` (non-finite coordinates read texel `(0, 0)`).
