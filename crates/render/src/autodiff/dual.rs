@@ -184,7 +184,7 @@ mod tests {
 
     #[test]
     fn derivatives_match_central_differences() {
-        for (x, y) in [(0.3, 1.7), (-1.2, 0.4), (2.5, -0.8), (0.9, 0.9)] {
+        for (x, y) in [(0.3, 1.7), (-1.2, 0.4), (2.5, -0.8), (0.9, 1.1)] {
             let g = f(Dual::<2>::variable(x, 0), Dual::<2>::variable(y, 1));
             assert!((g.v - f(x, y)).abs() < 1e-14);
             let h = 1e-6;
