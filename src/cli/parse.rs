@@ -191,6 +191,16 @@ pub(crate) fn mala_preset(text: &str) -> Result<mcmc_core::langevin::LangevinPar
     }
 }
 
+/// Parses `--mala-gradient`.
+pub(crate) fn mala_gradient(text: &str) -> Result<render::mlt::mala::GradientMethod, String> {
+    let t = text.trim().to_ascii_lowercase();
+    render::mlt::mala::GradientMethod::ALL
+        .iter()
+        .find(|(name, _)| *name == t)
+        .map(|(_, m)| *m)
+        .ok_or_else(|| format!("expected dual or fd, got '{text}'"))
+}
+
 /// Parses `--perturbation`.
 pub(crate) fn perturbation(text: &str) -> Result<pathspace::PerturbationKind, String> {
     match text.trim().to_ascii_lowercase().as_str() {

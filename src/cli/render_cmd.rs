@@ -127,6 +127,11 @@ pub(crate) struct RenderArgs {
     #[arg(long, allow_negative_numbers = true, value_name = "D", default_value_t = 3,
           value_parser = clap::value_parser!(u32).range(0..=1024))]
     mala_max_depth: u32,
+    /// mala*: gradient of the log contribution, `dual` (forward-mode dual numbers through the
+    /// differentiable path evaluator; finite differences where it does not apply) or `fd`
+    /// (central finite differences of the f32 renderer).
+    #[arg(long, value_name = "dual|fd", default_value = "dual", value_parser = parse::mala_gradient)]
+    mala_gradient: render::mlt::mala::GradientMethod,
     /// Environment light: `none`, a radiance `R,G,B` or grey `V` (each in 0..=1e6), or an
     /// equirectangular map (.exr, .hdr, .pfm; +Y up, image centre towards -Z) [default: the
     /// scene's lights; a scene without any light gets a uniform environment of radiance 1].
@@ -250,6 +255,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             mala: render::mlt::mala::MalaConfig {
                 params: args.mala_preset,
                 max_depth: args.mala_max_depth,
+                gradient: args.mala_gradient,
                 ..render::mlt::mala::MalaConfig::default()
             },
             perturbation: args.perturbation,

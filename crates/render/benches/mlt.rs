@@ -16,7 +16,7 @@ use mcmc_core::{Chain, Mh, NoAdaptation, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::SeedableRng;
 use render::bdpt::{self, BdptParams, BdptScratch};
-use render::mlt::mala::{self, DifferentiableMmlt, MalaConfig, MalaVariant};
+use render::mlt::mala::{self, DifferentiableMmlt, GradientMethod, MalaConfig, MalaVariant};
 use render::mlt::{MmltTarget, PssmltTarget, PATH_STREAMS};
 use render::sampler::{IndependentSampler, Sampler};
 use render::scene::Scene;
@@ -115,7 +115,8 @@ fn integrators(c: &mut Criterion) {
     // MMLT: the chain of depth 2 (most of the image's light in this scene is 1-2 bounces).
     let mmlt = MmltTarget::all_depths(&scene, params, SIZE, SIZE);
     bench_chain(c, "mmlt_depth2_1_thread", &mmlt[2], kernel());
-    // Langevin MLT on the same depth: plain and hybrid MALA (finite-difference gradients).
+    // Langevin MLT on the same depth: plain and hybrid MALA (dual-number gradients), and plain
+    // MALA with finite-difference gradients.
     let config = MalaConfig::default();
     let small = SmallMutation::Kelemen(KelemenParams::kelemen2002());
     let diff = DifferentiableMmlt::new(mmlt[2], config.fd_step);
@@ -128,10 +129,21 @@ fn integrators(c: &mut Criterion) {
             mala::mala_kernel(&config, 2, small, 0.3),
         );
     }
+    let config = MalaConfig {
+        variant: MalaVariant::Plain,
+        ..config
+    };
+    bench_chain(
+        c,
+        "mala_fd_depth2_1_thread",
+        &diff.with_method(GradientMethod::FiniteDifference),
+        mala::mala_kernel(&config, 2, small, 0.3),
+    );
 }
 
-/// The cost of one value + gradient of the depth-2 MMLT target against one value, at a state
-/// with light (finite differences: `2 d + 1` evaluations for `d` moved coordinates).
+/// The cost of one value + gradient of the MMLT targets of depth 1-3 against one value, at a
+/// state with light: dual numbers (one f32 evaluation plus one replay in `Dual<N>`) and finite
+/// differences (`2 d + 1` evaluations for `d` moved coordinates).
 fn gradient(c: &mut Criterion) {
     let scene = scene();
     let params = BdptParams::default();
@@ -155,8 +167,12 @@ fn gradient(c: &mut Criterion) {
             b.iter(|| black_box(target.evaluate(&mut x, &mut payload)))
         });
         let mut grad = Vec::new();
-        group.bench_function("value_and_gradient", |b| {
+        group.bench_function("value_and_gradient_dual", |b| {
             b.iter(|| black_box(target.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
+        });
+        let fd = target.with_method(GradientMethod::FiniteDifference);
+        group.bench_function("value_and_gradient_fd", |b| {
+            b.iter(|| black_box(fd.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
         });
         group.finish();
     }

@@ -1,5 +1,7 @@
 //! The finite-difference gradient of Langevin MLT's targets (`render::mlt::mala::
-//! DifferentiableMmlt`) on bundled scenes: one entry per moved coordinate, finite, and
+//! DifferentiableMmlt` with `GradientMethod::FiniteDifference`) on bundled scenes, and the
+//! default dual-number gradient against it (same 80 % / 0.01 rule: the f32 finite
+//! differences are the noisier side): one entry per moved coordinate, finite, and
 //! consistent across step sizes where the path structure does not change (the log luminance
 //! is smooth there, so central differences at `h` and `h / 4` agree to the truncation error
 //! `O(h^2)` plus f32 noise `~1e-7 / h`). Negative control: a stale gradient (the one of the
@@ -18,7 +20,7 @@ use mcmc_core::{DifferentiableTarget, Target};
 use pss::langevin::moved_indices;
 use pss::PssState;
 use render::bdpt::BdptParams;
-use render::mlt::mala::DifferentiableMmlt;
+use render::mlt::mala::{DifferentiableMmlt, GradientMethod};
 use render::mlt::{MmltTarget, PATH_STREAMS};
 use render::scene::Scene;
 
@@ -40,14 +42,18 @@ fn finite_difference_gradients_are_consistent_on_bundled_scenes() {
     let params = BdptParams::default();
     let mut checked = 0;
     let mut agree = 0;
+    let mut dual_agree = 0;
     let mut comparable = 0;
     let mut control_detected = 0;
     let mut previous: Vec<f64> = Vec::new();
     for (name, scene) in scenes() {
         for depth in 1..=3usize {
             let base = MmltTarget::all_depths(&scene, params, 32, 32)[depth];
-            let coarse = DifferentiableMmlt::new(base, 1e-3);
-            let fine = DifferentiableMmlt::new(base, 2.5e-4);
+            let coarse =
+                DifferentiableMmlt::new(base, 1e-3).with_method(GradientMethod::FiniteDifference);
+            let fine =
+                DifferentiableMmlt::new(base, 2.5e-4).with_method(GradientMethod::FiniteDifference);
+            let dual = DifferentiableMmlt::new(base, 1e-4);
             let mut payload = Default::default();
             let mut found = 0;
             for key in 0..20_000u64 {
@@ -73,6 +79,15 @@ fn finite_difference_gradients_are_consistent_on_bundled_scenes() {
                     "{name}: one entry per moved coordinate"
                 );
                 assert!(g1.iter().chain(&g2).all(|g| g.is_finite()));
+                let mut gd = Vec::new();
+                assert_eq!(
+                    dual.evaluate_with_grad(&mut x, &mut payload, &mut gd),
+                    value
+                );
+                assert_eq!(gd.len(), idx.len(), "{name}: dual gradient dimension");
+                if norm_relative_difference(&gd, &g2) < 0.01 {
+                    dual_agree += 1;
+                }
                 let m = norm_relative_difference(&g1, &g2);
                 if m < 0.01 {
                     agree += 1;
@@ -93,8 +108,12 @@ fn finite_difference_gradients_are_consistent_on_bundled_scenes() {
         }
     }
     eprintln!(
-        "{checked} states checked, {agree} agree within 0.01; the stale-gradient control was \
-         detected on {control_detected} of {comparable}"
+        "{checked} states checked, {agree} agree within 0.01 ({dual_agree} with the dual \
+         gradient); the stale-gradient control was detected on {control_detected} of {comparable}"
+    );
+    assert!(
+        dual_agree * 10 >= checked * 8,
+        "the dual gradient agrees with finite differences on only {dual_agree} of {checked}"
     );
     assert!(checked >= 30, "too few states with light: {checked}");
     assert!(

@@ -4,8 +4,9 @@
 //! sharing their gradient caches through the render loop.
 //!
 //! - **Targets.** [`DifferentiableMmlt`]: an [`MmltTarget`] whose log luminance is
-//!   differentiated with respect to the coordinates the path read, by central finite
-//!   differences of the f32 evaluator (see its docs for why not automatic differentiation yet).
+//!   differentiated with respect to the coordinates the path read, by forward-mode dual
+//!   numbers through the differentiable path evaluator [`crate::bdpt::diff`] (finite
+//!   differences of the f32 evaluator as the fallback and as an option).
 //! - **Which chains run MALA** (the paper's section 7 rule, "MALA only for paths shorter than
 //!   8 vertices, i.e. fewer than 16 primary-sample dimensions in their parameterisation,
 //!   Kelemen/Gaussian mutations beyond"): our layout reads about 4 numbers per vertex (camera
@@ -39,7 +40,8 @@ use pss::langevin::{moved_indices, PssCoordinates};
 use pss::{LargeStep, Pending, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::Rng;
 
-use super::{MmltTarget, PathPayload};
+use super::{MmltTarget, PathPayload, PATH_STREAMS};
+use crate::bdpt::diff::{evaluate_strategy, Dual, Evaluation};
 
 /// The MALA variant of `--integrator mala*`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -91,6 +93,27 @@ impl MalaVariant {
     }
 }
 
+/// How [`DifferentiableMmlt`] computes the gradient of the log luminance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum GradientMethod {
+    /// Forward-mode dual numbers through the differentiable path evaluator
+    /// ([`crate::bdpt::diff`]), falling back to finite differences where it does not apply
+    /// (unsupported lights or materials, more than 32 coordinates, a decision that flips
+    /// between the f32 and f64 arithmetic).
+    #[default]
+    Dual,
+    /// Central finite differences of the f32 evaluator (one-sided near a structure change).
+    FiniteDifference,
+}
+
+impl GradientMethod {
+    /// The methods with their `--mala-gradient` names.
+    pub const ALL: [(&'static str, GradientMethod); 2] = [
+        ("dual", GradientMethod::Dual),
+        ("fd", GradientMethod::FiniteDifference),
+    ];
+}
+
 /// Settings of Langevin MLT.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MalaConfig {
@@ -101,7 +124,10 @@ pub struct MalaConfig {
     /// Chains of MMLT depth up to this use MALA; deeper ones use the Kelemen small step
     /// (default 3, see the module docs).
     pub max_depth: u32,
-    /// Finite-difference step of the gradient in primary sample space (default `1e-4`).
+    /// How gradients are computed (default [`GradientMethod::Dual`]).
+    pub gradient: GradientMethod,
+    /// Finite-difference step of the gradient in primary sample space (default `1e-4`; also
+    /// the fallback of [`GradientMethod::Dual`]).
     pub fd_step: f64,
     /// Standard deviation of the cheap first stage of `--dr-variant cheap-then-expensive`
     /// (default 1/64, Kelemen 2002's `s2`).
@@ -114,6 +140,7 @@ impl Default for MalaConfig {
             variant: MalaVariant::Hybrid,
             params: LangevinParams::luan2020(),
             max_depth: 3,
+            gradient: GradientMethod::Dual,
             fd_step: 1e-4,
             cheap_sigma: 1.0 / 64.0,
         }
@@ -129,38 +156,98 @@ thread_local! {
 
 /// The multiplexed path sampler of one depth as a differentiable target: the gradient of the
 /// log luminance of the strategy's contribution with respect to the primary samples the path
-/// read ([`pss::langevin::PssCoordinates`] order), by central finite differences of the f32
-/// evaluator with step `h` (one-sided where one side changes the read set or carries no light;
-/// 0 where both do).
+/// read ([`pss::langevin::PssCoordinates`] order).
 ///
-/// # Why finite differences (a departure from issue 11's recommended design)
-/// The recommended design is a forward-mode dual-number evaluator of one strategy that replays
-/// the f32 pass's discrete decisions. It is not written yet. Finite differences cost
-/// `2 d + 1` evaluations per gradient (`d` the coordinates moved, about 8-20 here) instead of
-/// the goal of 3, and the f32 evaluator limits their accuracy (about `1e-7 / h` relative),
-/// but they cover every material, light and camera the renderer has, and MALA stays exact
-/// whatever the gradient's accuracy: forward and reverse moves use the same deterministic
-/// gradient function of the state. docs/performance.md records the cost.
+/// - [`GradientMethod::Dual`] (default, issue 11's design): the f32 evaluator gives the value
+///   the chain uses; the differentiable evaluator [`crate::bdpt::diff`] replays the same path
+///   in forward-mode dual numbers (one lane per coordinate read, 8/16/24/32 lanes) and gives
+///   `d ln L / du = (dL/du) / L`. Where it does not apply it falls back to finite
+///   differences.
+/// - [`GradientMethod::FiniteDifference`]: central differences of the f32 evaluator with step
+///   `h` (one-sided where one side changes the read set or carries no light; 0 where both do),
+///   `2 d + 1` evaluations per gradient and accuracy about `1e-7 / h` relative.
+///
+/// Either way MALA stays exact: forward and reverse moves use the same deterministic gradient
+/// function of the state, whatever its accuracy.
 #[derive(Clone, Copy, Debug)]
 pub struct DifferentiableMmlt<'s> {
     target: MmltTarget<'s>,
     h: f64,
+    method: GradientMethod,
 }
 
 impl<'s> DifferentiableMmlt<'s> {
-    /// `target` differentiated with step `h` (clamped to `[1e-7, 1e-2]`).
+    /// `target` differentiated by dual numbers, finite differences with step `h` (clamped to
+    /// `[1e-7, 1e-2]`) as the fallback.
     #[must_use]
     pub fn new(target: MmltTarget<'s>, h: f64) -> Self {
         Self {
             target,
             h: h.clamp(1e-7, 1e-2),
+            method: GradientMethod::Dual,
         }
+    }
+
+    /// The same target with gradient method `method`.
+    #[must_use]
+    pub fn with_method(mut self, method: GradientMethod) -> Self {
+        self.method = method;
+        self
     }
 
     /// The MMLT depth of the target.
     #[must_use]
     pub fn depth(&self) -> u32 {
         self.target.depth()
+    }
+
+    /// The dual-number gradient of `ln L` at `x` (already evaluated) into `grad`, or false
+    /// where the evaluator does not apply.
+    fn dual_gradient(&self, x: &PssState, grad: &mut Vec<f64>) -> bool {
+        let counts = x.read_counts();
+        if x.streams() != PATH_STREAMS || counts[PATH_STREAMS..].iter().any(|&c| c != 0) {
+            return false;
+        }
+        let n: usize = counts[..PATH_STREAMS].iter().sum();
+        match n {
+            0..=8 => self.dual_lanes::<8>(x, n, grad),
+            9..=16 => self.dual_lanes::<16>(x, n, grad),
+            17..=24 => self.dual_lanes::<24>(x, n, grad),
+            25..=32 => self.dual_lanes::<32>(x, n, grad),
+            _ => false,
+        }
+    }
+
+    fn dual_lanes<const N: usize>(&self, x: &PssState, n: usize, grad: &mut Vec<f64>) -> bool {
+        let (scene, params, size) = self.target.parts();
+        let counts = x.read_counts();
+        let lanes = [0, counts[0], counts[0] + counts[1]];
+        let e = evaluate_strategy::<Dual<N>>(
+            scene,
+            self.target.depth(),
+            size,
+            params.heuristic,
+            x.raw_values(),
+            PATH_STREAMS,
+            lanes,
+            Dual::variable,
+        );
+        let (Evaluation::Contribution { reads, .. }, Some(lum)) = (&e, e.luminance()) else {
+            return false;
+        };
+        if reads[..] != counts[..PATH_STREAMS] || !(lum.v > 0.0 && lum.v.is_finite()) {
+            return false;
+        }
+        grad.clear();
+        grad.extend(lum.d[..n].iter().map(|d| {
+            let g = d / lum.v;
+            if g.is_finite() {
+                g
+            } else {
+                0.0
+            }
+        }));
+        true
     }
 }
 
@@ -181,6 +268,10 @@ impl DifferentiableTarget for DifferentiableMmlt<'_> {
         grad: &mut Vec<f64>,
     ) -> f64 {
         let value = self.target.evaluate(x, payload);
+        grad.clear();
+        if value.is_finite() && self.method == GradientMethod::Dual && self.dual_gradient(x, grad) {
+            return value;
+        }
         grad.clear();
         if !value.is_finite() {
             let mut n = Vec::new();
@@ -385,7 +476,7 @@ pub fn render(
     let (w, h) = (settings.width as u32, settings.height as u32);
     let targets: Vec<_> = MmltTarget::all_depths(scene, params, w, h)
         .into_iter()
-        .map(|t| DifferentiableMmlt::new(t, config.fd_step))
+        .map(|t| DifferentiableMmlt::new(t, config.fd_step).with_method(config.gradient))
         .collect();
     super::render_mlt_per_chain(
         &targets,

@@ -128,11 +128,16 @@ impl<'s> MmltTarget<'s> {
     }
 }
 
-impl MmltTarget<'_> {
+impl<'s> MmltTarget<'s> {
     /// The path depth this target samples.
     #[must_use]
     pub fn depth(&self) -> u32 {
         self.depth
+    }
+
+    /// The scene, BDPT parameters and image size (for the differentiable evaluator).
+    pub(crate) fn parts(&self) -> (&'s Scene, BdptParams, Vec2) {
+        (self.scene, self.params, self.size)
     }
 }
 
