@@ -77,6 +77,10 @@ fn bad_flags_are_rejected_with_the_flag_named() {
             "sideways",
         ],
     );
+    assert_fails_with(
+        &["render", "--integrator", "mala", "--mala-gradient", "reverse"],
+        &["--mala-gradient", "expected dual or fd", "reverse"],
+    );
     assert_fails_with(&["render", "-o", "out.png"], &["--output", ".exr"]);
     assert_fails_with(
         &["render", "-o", "/no/such/dir/out.exr"],
