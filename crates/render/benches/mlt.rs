@@ -15,6 +15,7 @@ use mcmc_core::DifferentiableTarget;
 use mcmc_core::{Chain, Mh, NoAdaptation, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::SeedableRng;
+use render::bdpt::diff::evaluate_strategy;
 use render::bdpt::{self, BdptParams, BdptScratch};
 use render::mlt::mala::{self, DifferentiableMmlt, GradientMethod, MalaConfig, MalaVariant};
 use render::mlt::{MmltTarget, PssmltTarget, PATH_STREAMS};
@@ -169,6 +170,24 @@ fn gradient(c: &mut Criterion) {
         let mut grad = Vec::new();
         group.bench_function("value_and_gradient_dual", |b| {
             b.iter(|| black_box(target.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
+        });
+        // The replay alone in f64 (no derivatives): what the dual pass costs without lanes.
+        let counts = x.read_counts();
+        let lanes = [0, counts[0], counts[0] + counts[1]];
+        let (scene_ref, size) = (&scene, Vec2::splat(SIZE as f32));
+        group.bench_function("replay_f64", |b| {
+            b.iter(|| {
+                black_box(evaluate_strategy::<f64>(
+                    scene_ref,
+                    depth,
+                    size,
+                    params.heuristic,
+                    x.raw_values(),
+                    PATH_STREAMS,
+                    lanes,
+                    |v, _| v,
+                ))
+            })
         });
         let fd = target.with_method(GradientMethod::FiniteDifference);
         group.bench_function("value_and_gradient_fd", |b| {
