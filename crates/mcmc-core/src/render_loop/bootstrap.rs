@@ -116,6 +116,8 @@ impl ChunkSums {
 pub(crate) struct BootstrapOutcome {
     /// Estimate of `b` (sum over targets of the mean weight).
     pub b: f64,
+    /// Estimate of each target's integral `b_d` (its mean weight; they sum to `b`).
+    pub target_b: Vec<f64>,
     /// Standard error of `b` (from the per-row sums, rows being independent).
     pub standard_error: f64,
     /// Samples evaluated (over all targets).
@@ -185,6 +187,7 @@ where
     let mut weights = vec![0.0; batch.min(total) as usize];
     let mut sums = ChunkSums::new();
     let (mut sum, mut sum_sq_rows, mut evaluated) = (0.0f64, 0.0f64, 0u64);
+    let mut target_sums = vec![0.0f64; d as usize];
     let (mut stopped_early, mut cancelled) = (false, false);
     let init = || (source.empty(), T::Payload::default());
     while evaluated < total {
@@ -206,9 +209,10 @@ where
         );
         for row in weights[..len].chunks(d as usize) {
             let mut r = 0.0;
-            for &w in row {
+            for (&w, t) in row.iter().zip(target_sums.iter_mut()) {
                 sums.push(w);
                 r += w;
+                *t += w;
             }
             sum += r;
             sum_sq_rows += r * r;
@@ -223,8 +227,13 @@ where
     } else {
         f64::INFINITY
     };
+    let target_b = target_sums
+        .iter()
+        .map(|&s| if rows > 0.0 { s / rows } else { 0.0 })
+        .collect();
     let mut outcome = BootstrapOutcome {
         b,
+        target_b,
         standard_error,
         evaluated,
         starts: Vec::new(),

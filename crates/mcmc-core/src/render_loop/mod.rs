@@ -27,10 +27,14 @@
 
 mod bootstrap;
 mod jobs;
+mod large_step_mis;
 mod shared;
 mod splat;
 
 pub use bootstrap::{bootstrap_key, IndependentStates};
+#[cfg(feature = "testing")]
+pub(crate) use large_step_mis::mis_step;
+pub use large_step_mis::LargeStepMis;
 pub use shared::{Both, SharedController};
 pub use splat::{Splat, SplatGrid, SplatObserver, SplatPayload, SplatSink};
 
@@ -80,6 +84,13 @@ pub struct LoopSettings {
     /// Under a time budget, the share of the time the bootstrap may use (default 0.25, in
     /// (0, 1]); it stops early (with a note) when the share is spent.
     pub bootstrap_time_share: f64,
+    /// Combine the large-step samples with the Metropolis estimator by multiple importance
+    /// sampling (Kelemen et al. 2002, section 4; LuxCore's METROPOLIS sampler): see
+    /// [`LargeStepMis`]. Default **off** (the plain expected-value estimator, Kelemen eq. 5).
+    /// The loop passes it, with the chain's target's bootstrap estimate `b_d`, to the kernel
+    /// factory in [`ChainSlot`]; it takes effect for kernels made with
+    /// [`LargeStepMis::for_slot`] (others ignore it).
+    pub large_step_mis: bool,
 }
 
 impl Default for LoopSettings {
@@ -92,6 +103,7 @@ impl Default for LoopSettings {
             round_mutations: 1000,
             jobs: 32,
             bootstrap_time_share: 0.25,
+            large_step_mis: false,
         }
     }
 }
@@ -157,12 +169,17 @@ impl LoopSettings {
 }
 
 /// Which chain a kernel or controller is made for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChainSlot {
     /// Chain index (0-based, fixed for a seed).
     pub chain: usize,
     /// Index of the target the chain samples (its start's target).
     pub target: usize,
+    /// The bootstrap estimate `b_d` of the integral of that target (MMLT: of its depth).
+    pub target_b: f64,
+    /// [`LoopSettings::large_step_mis`]: the kernel should splat with the large-step MIS
+    /// estimator ([`LargeStepMis::for_slot`]).
+    pub large_step_mis: bool,
 }
 
 /// What a render loop produced.
@@ -177,6 +194,8 @@ pub struct LoopOutput<K, Sh> {
     pub b: f64,
     /// Standard error of `b`.
     pub b_standard_error: f64,
+    /// The bootstrap estimate `b_d` of each target's integral (they sum to `b`).
+    pub target_b: Vec<f64>,
     /// Bootstrap samples evaluated (over all targets).
     pub bootstrap_samples: u64,
     /// Chains that ran.
@@ -352,6 +371,7 @@ where
             splat_scale: 0.0,
             b: boot.b,
             b_standard_error: boot.standard_error,
+            target_b: boot.target_b.clone(),
             bootstrap_samples: boot.evaluated,
             chains: 0,
             mutations: 0,
@@ -393,7 +413,12 @@ where
                 let mut job = jobs::Job::new((self.sink)());
                 for c in lo..hi {
                     let (target, index) = boot.starts[c];
-                    let slot = ChainSlot { chain: c, target };
+                    let slot = ChainSlot {
+                        chain: c,
+                        target,
+                        target_b: boot.target_b[target],
+                        large_step_mis: settings.large_step_mis,
+                    };
                     let mut state = self.states.empty();
                     self.states
                         .independent(bootstrap_key(settings.seed, target, index), &mut state);

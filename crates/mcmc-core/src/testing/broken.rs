@@ -7,8 +7,10 @@
 
 use rand::Rng;
 
+use crate::controller::LargeStepTunable;
 use crate::kernel::{mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
+use crate::render_loop::mis_step;
 use crate::target::{Sample, SampleOf, Target};
 
 /// Wraps an asymmetric proposal and *claims* it is symmetric: `propose` reports a Hastings
@@ -356,5 +358,93 @@ impl<T: Target, K: Kernel<T>> Kernel<T> for PaperSplatWeights<K> {
 
     fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
         self.0.reverse_path(target, path)
+    }
+}
+
+/// Kelemen et al. 2002's large-step MIS estimator ([`crate::render_loop::LargeStepMis`])
+/// with the large step's term dropped from the denominators: every splat keeps its MH
+/// weight (`f / (f + 0) = 1`), and a large step's candidate still gets its extra splat.
+///
+/// The bug: writing the weights as `(a + 1) / (f(y)/b)` and `(1 - a) / (f(x)/b)` (the
+/// Metropolis technique alone) while adding the independent samples: the large steps are
+/// counted twice, so one step from `pi` splats `1 + p` in expectation.
+#[derive(Clone, Debug)]
+pub struct MisWithoutLargeStepTerm<K>(pub K);
+
+impl<T: Target, K: Kernel<T> + LargeStepTunable> Kernel<T> for MisWithoutLargeStepTerm<K> {
+    fn step<R, O>(
+        &mut self,
+        target: &T,
+        current: &mut SampleOf<T>,
+        scratch: &mut [SampleOf<T>],
+        rng: &mut R,
+        observer: &mut O,
+    ) -> StepInfo
+    where
+        R: Rng + ?Sized,
+        O: Observer<T::State, T::Payload> + ?Sized,
+    {
+        mis_step(
+            &mut self.0,
+            0.0,
+            true,
+            target,
+            current,
+            scratch,
+            rng,
+            observer,
+        )
+    }
+
+    fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
+        self.0.log_flow(target, path)
+    }
+}
+
+/// Kelemen et al. 2002's large-step MIS estimator weighted with a large-step probability
+/// `p_weights` other than the one the kernel draws with (`b_q` is `b` times the large
+/// step's density, as in [`crate::render_loop::LargeStepMis::new`]).
+///
+/// The bug: weights computed from a stale or final `p` (e.g. the automatic controller's
+/// estimate applied to the steps of its estimation phase, which used the initial `p`). One
+/// step from `pi` then splats `integral h pi (pi + p q) / (pi + p' q)`, not `E_pi[h]`.
+#[derive(Clone, Debug)]
+pub struct MisWithStaleProbability<K> {
+    /// The kernel (it draws with its own large-step probability).
+    pub kernel: K,
+    /// `b q`: the target's integral times the large step's density.
+    pub b_q: f64,
+    /// The large-step probability the weights use.
+    pub p_weights: f64,
+}
+
+impl<T: Target, K: Kernel<T> + LargeStepTunable> Kernel<T> for MisWithStaleProbability<K> {
+    fn step<R, O>(
+        &mut self,
+        target: &T,
+        current: &mut SampleOf<T>,
+        scratch: &mut [SampleOf<T>],
+        rng: &mut R,
+        observer: &mut O,
+    ) -> StepInfo
+    where
+        R: Rng + ?Sized,
+        O: Observer<T::State, T::Payload> + ?Sized,
+    {
+        let c = self.b_q * self.p_weights;
+        mis_step(
+            &mut self.kernel,
+            c,
+            true,
+            target,
+            current,
+            scratch,
+            rng,
+            observer,
+        )
+    }
+
+    fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
+        self.kernel.log_flow(target, path)
     }
 }

@@ -158,3 +158,86 @@ mod tests {
         assert!(ThresholdSelection::new(0.0, &[1.0], &[1.0, 2.0]).is_err());
     }
 }
+
+/// Kelemen et al. 2002's mutation mixture on a box of `R^n`: with probability `1 - p` a
+/// Gaussian random walk (the small step, component 0), with probability `p` an independent
+/// uniform draw on the box (the large step, component 1, density `1 / volume`). The toy
+/// counterpart of `pss::PssmltProposal`, for tests of large-step control and of the
+/// large-step MIS estimator ([`crate::render_loop::LargeStepMis`]).
+#[derive(Clone, Debug)]
+pub struct LargeStepWalk {
+    small: crate::proposal::GaussianRandomWalk,
+    large: crate::proposal::IndependentUniform,
+    volume: f64,
+    p_large: f64,
+}
+
+impl LargeStepWalk {
+    /// Small steps of scale `sigma > 0`, large steps uniform on `[lo, hi]`, large-step
+    /// probability `p_large` in `[0, 1]`.
+    ///
+    /// # Errors
+    /// [`McmcError::InvalidParameter`] for a parameter out of range or an invalid box.
+    pub fn new(sigma: f64, lo: Vec<f64>, hi: Vec<f64>, p_large: f64) -> Result<Self, McmcError> {
+        McmcError::check_range("p_large", p_large, 0.0, 1.0, "[0, 1]")?;
+        let volume = lo.iter().zip(&hi).map(|(l, h)| h - l).product();
+        Ok(Self {
+            small: crate::proposal::GaussianRandomWalk::new(sigma)?,
+            large: crate::proposal::IndependentUniform::new(lo, hi)?,
+            volume,
+            p_large,
+        })
+    }
+
+    /// The large step's density `q = 1 / volume` on the box.
+    #[must_use]
+    pub fn large_step_density(&self) -> f64 {
+        1.0 / self.volume
+    }
+}
+
+impl Proposal<Vec<f64>> for LargeStepWalk {
+    fn propose<R: Rng + ?Sized>(&self, x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut R) -> Proposed {
+        if rand::RngExt::random::<f64>(rng) < self.p_large {
+            self.large.propose(x, y, rng).with_component(1)
+        } else {
+            self.small.propose(x, y, rng)
+        }
+    }
+
+    fn log_q(&self, from: &Vec<f64>, to: &Vec<f64>) -> f64 {
+        let small = (1.0 - self.p_large) * self.small.log_q(from, to).exp();
+        let large = self.p_large * self.large.log_q(from, to).exp();
+        (small + large).ln()
+    }
+
+    fn num_components(&self) -> usize {
+        2
+    }
+
+    fn log_q_component(&self, j: usize, from: &Vec<f64>, to: &Vec<f64>) -> f64 {
+        match j {
+            0 => (1.0 - self.p_large).ln() + self.small.log_q(from, to),
+            _ => self.p_large.ln() + self.large.log_q(from, to),
+        }
+    }
+
+    fn log_hastings(&self, j: usize, x: &Vec<f64>, y: &Vec<f64>) -> f64 {
+        match j {
+            0 => 0.0,
+            _ => self.large.log_q(y, x) - self.large.log_q(x, y),
+        }
+    }
+}
+
+impl crate::controller::LargeStepTunable for LargeStepWalk {
+    fn large_step_probability(&self) -> f64 {
+        self.p_large
+    }
+    fn set_large_step_probability(&mut self, p: f64) {
+        self.p_large = p.clamp(0.0, 1.0);
+    }
+    fn is_large_step(&self, component: usize) -> bool {
+        component == 1
+    }
+}

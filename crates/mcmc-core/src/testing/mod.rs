@@ -61,14 +61,15 @@ mod stationarity;
 mod two_sample;
 
 pub use broken::{
-    ForcedAcceptance, MhWithoutHastings, SplatFinalState, TreatedAsSymmetric, WithoutCurrentSplat,
+    ForcedAcceptance, MhWithoutHastings, MisWithStaleProbability, MisWithoutLargeStepTerm,
+    SplatFinalState, TreatedAsSymmetric, WithoutCurrentSplat,
 };
 pub use chi_square::{chi_square_test, sidak_alpha, ChiSquareReport, ALPHA};
 pub use finite_state::{
     assert_finite_state_balance, finite_state_check, grid_centres, FiniteStateReport,
     FINITE_STATE_TOLERANCE,
 };
-pub use fixtures::{AsymmetricWalk, ThresholdSelection};
+pub use fixtures::{AsymmetricWalk, LargeStepWalk, ThresholdSelection};
 pub use pairwise::{
     assert_hastings_consistent, assert_pairwise_balance, assert_path_balance,
     assert_symmetric_proposal, log_values_agree, path_flows, PairwiseParams, PairwiseReport,
