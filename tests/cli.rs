@@ -78,8 +78,24 @@ fn bad_flags_are_rejected_with_the_flag_named() {
         ],
     );
     assert_fails_with(
-        &["render", "--integrator", "mala", "--mala-gradient", "reverse"],
+        &[
+            "render",
+            "--integrator",
+            "mala",
+            "--mala-gradient",
+            "reverse",
+        ],
         &["--mala-gradient", "expected dual or fd", "reverse"],
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "pssmlt",
+            "--large-step-mis",
+            "maybe",
+        ],
+        &["--large-step-mis", "expected on or off", "maybe"],
     );
     assert_fails_with(&["render", "-o", "out.png"], &["--output", ".exr"]);
     assert_fails_with(

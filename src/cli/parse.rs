@@ -191,6 +191,15 @@ pub(crate) fn mala_preset(text: &str) -> Result<mcmc_core::langevin::LangevinPar
     }
 }
 
+/// Parses `--large-step-mis`: `on` or `off`.
+pub(crate) fn on_off(text: &str) -> Result<bool, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("expected on or off, got '{text}'")),
+    }
+}
+
 /// Parses `--mala-gradient`.
 pub(crate) fn mala_gradient(text: &str) -> Result<render::mlt::mala::GradientMethod, String> {
     let t = text.trim().to_ascii_lowercase();

@@ -79,6 +79,12 @@ pub(crate) struct RenderArgs {
     /// estimated from the first mutations of every chain) or a number in 0..=1.
     #[arg(long, value_name = "auto|P", default_value = "0.3", value_parser = parse::large_step)]
     large_step: LargeStepMode,
+    /// pssmlt, mmlt: `on` combines the large-step samples with the Metropolis estimator by
+    /// multiple importance sampling (Kelemen et al. 2002, section 4; LuxCore's METROPOLIS
+    /// sampler), `off` uses the plain expected-value estimator.
+    #[arg(long, value_name = "on|off", default_value = "off", value_parser = parse::on_off,
+          action = clap::ArgAction::Set)]
+    large_step_mis: bool,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
     /// al. 2002) or `gaussian=SIGMA` with SIGMA in (0, 10] (pbrt-v3 uses gaussian=0.01).
     #[arg(long, value_name = "kelemen|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]
@@ -260,6 +266,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             },
             perturbation: args.perturbation,
             adapt: args.adapt,
+            large_step_mis: args.large_step_mis,
         },
         strategy_images: args.strategy_images,
     }

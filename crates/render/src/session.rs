@@ -49,6 +49,11 @@ pub struct McmcSettings {
     pub perturbation: pathspace::PerturbationKind,
     /// Path-space MLT: how the perturbation's scale is adapted (default fixed).
     pub adapt: crate::mlt::pathmlt::PathAdapt,
+    /// PSSMLT and MMLT: combine the large-step samples with the Metropolis estimator by
+    /// multiple importance sampling (Kelemen et al. 2002, section 4; LuxCore's METROPOLIS
+    /// sampler; [`crate::mlt::MltEstimator::large_step_mis`]). Default off (measured in
+    /// docs/performance.md, "Equal-time efficiency (issue 17)"). Other integrators ignore it.
+    pub large_step_mis: bool,
 }
 
 impl Default for McmcSettings {
@@ -63,6 +68,7 @@ impl Default for McmcSettings {
             mala: MalaConfig::default(),
             perturbation: pathspace::PerturbationKind::Lens,
             adapt: crate::mlt::pathmlt::PathAdapt::Fixed,
+            large_step_mis: false,
         }
     }
 }
@@ -450,12 +456,37 @@ fn render_bidirectional(
                 )
             }
         }
-    } else if settings.integrator == IntegratorKind::Mmlt {
-        let targets = MmltTarget::all_depths(scene, params, w, h);
-        mlt::render_mlt(&targets, kernel, &mlt_settings, progress, cancel)
     } else {
-        let targets = [PssmltTarget::new(scene, params, w, h)];
-        mlt::render_mlt(&targets, kernel, &mlt_settings, progress, cancel)
+        let estimator = mlt::MltEstimator {
+            large_step_mis: m.large_step_mis,
+        };
+        if m.large_step_mis {
+            notes.push(
+                "large-step MIS (Kelemen et al. 2002, section 4): large steps also weighted as independent samples"
+                    .to_owned(),
+            );
+        }
+        if settings.integrator == IntegratorKind::Mmlt {
+            let targets = MmltTarget::all_depths(scene, params, w, h);
+            mlt::render_mlt_with_estimator(
+                &targets,
+                kernel,
+                &mlt_settings,
+                estimator,
+                progress,
+                cancel,
+            )
+        } else {
+            let targets = [PssmltTarget::new(scene, params, w, h)];
+            mlt::render_mlt_with_estimator(
+                &targets,
+                kernel,
+                &mlt_settings,
+                estimator,
+                progress,
+                cancel,
+            )
+        }
     };
     notes.extend(out.notes.iter().cloned());
     if let Some(msg) = &out.message {

@@ -84,6 +84,38 @@ fn drmlt_cheap_then_expensive_is_bit_identical() {
     assert!(bits(&run(&scene, &other)) != bits(&reference));
 }
 
+/// PSSMLT and MMLT with the large-step MIS estimator (`--large-step-mis on`), under fixed and
+/// automatic large-step probability: 1, 2 and 3 threads give the same image.
+#[test]
+fn large_step_mis_is_bit_identical() {
+    let scene = Scene::cornell_box(24, 16);
+    for integrator in [IntegratorKind::Pssmlt, IntegratorKind::Mmlt] {
+        for large_step in [
+            render::mlt::LargeStepMode::Fixed(0.3),
+            render::mlt::LargeStepMode::Auto {
+                initial: 0.5,
+                estimation_steps: 10,
+            },
+        ] {
+            let with = |threads| {
+                let mut s = settings(24, 16, threads, 13);
+                s.integrator = integrator;
+                s.mcmc.large_step = large_step;
+                s.mcmc.large_step_mis = true;
+                s
+            };
+            let reference = run(&scene, &with(1));
+            assert!(reference.mean_luminance() > 0.0);
+            for threads in [2, 3] {
+                assert!(
+                    bits(&run(&scene, &with(threads))) == bits(&reference),
+                    "{integrator:?} {large_step:?} with large-step MIS: {threads} threads differ from 1"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn different_seed_gives_a_different_image() {
     let scene = Scene::cornell_box(16, 16);

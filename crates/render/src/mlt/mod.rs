@@ -10,7 +10,8 @@ mod stage_map;
 
 pub use path_sampler::{MmltTarget, PathPayload, PssmltTarget, PATH_STREAMS};
 pub use run::{
-    render_mlt, render_mlt_per_chain, render_mlt_with_states, render_mlt_with_states_rounds,
-    LargeStepMode, MakeKernel, MltBudget, MltOutput, MltSettings, PerChain,
+    render_mlt, render_mlt_per_chain, render_mlt_with_estimator, render_mlt_with_states,
+    render_mlt_with_states_rounds, LargeStepMode, MakeKernel, MltBudget, MltEstimator, MltOutput,
+    MltSettings, PerChain,
 };
 pub use stage_map::StagedSplats;

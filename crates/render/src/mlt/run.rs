@@ -8,8 +8,8 @@ use std::time::Duration;
 
 use mcmc_core::controller::{AutoLargeStep, LargeStepEstimate, LargeStepStats, LargeStepTunable};
 use mcmc_core::render_loop::{
-    Both, ChainSlot, IndependentStates, LoopBudget, LoopOutput, LoopSettings, RenderLoop,
-    SharedController, SplatPayload,
+    Both, ChainSlot, IndependentStates, LargeStepMis, LoopBudget, LoopOutput, LoopSettings,
+    RenderLoop, SharedController, SplatPayload,
 };
 use mcmc_core::stats::AcceptanceStats;
 use mcmc_core::{Controller, Kernel, NoAdaptation, Progress, Target};
@@ -129,17 +129,62 @@ impl<K, F: Fn(ChainSlot, f64) -> K + Sync> MakeKernel<K> for PerChain<F> {
     }
 }
 
+/// Options of an MCMC render's estimator, beside [`MltSettings`] (a separate struct, so that
+/// existing `MltSettings` literals stay valid): see [`render_mlt_with_estimator`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MltEstimator {
+    /// Combine the large-step samples with the Metropolis estimator by multiple importance
+    /// sampling (Kelemen et al. 2002, section 4; LuxCore's METROPOLIS sampler;
+    /// `mcmc_core::render_loop::LargeStepMis`): a large step's candidate is splatted with
+    /// weight `(a + 1) / (f/b_d + p)`, every other splat with its expected-value weight
+    /// over `f/b_d + p` (in the loop's units: times `f / (f + b_d p)`), `b_d` the bootstrap
+    /// estimate of the chain's target (MMLT: of its depth), `p` the large-step probability
+    /// of that step. Default off (docs/performance.md, "Equal-time efficiency (issue 17)",
+    /// has the measurement). Two-stage (delayed-rejection) kernels ignore it.
+    pub large_step_mis: bool,
+}
+
 /// Runs an MCMC render over one or more targets (PSSMLT: one; MMLT: one per path depth)
 /// through `mcmc_core::render_loop`: bootstrap of fresh PSS points (`pss::FreshPss`), chain
 /// starts resampled in proportion to `f`, chains in 32 fixed jobs, expected-value splats, the
 /// large-step controller of `settings.large_step`.
 ///
 /// Pixel estimate: `I_j = (b W H / N) sum_i sum_splats w_i rgb / f(u_i)` with `N` the total
-/// number of mutations (Kelemen et al. 2002, eq. 5 with expected values).
+/// number of mutations (Kelemen et al. 2002, eq. 5 with expected values). The same as
+/// [`render_mlt_with_estimator`] with the default [`MltEstimator`].
 pub fn render_mlt<T, K>(
     targets: &[T],
     make_kernel: impl MakeKernel<K>,
     settings: &MltSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> MltOutput
+where
+    T: Target<State = PssState>,
+    T::Payload: SplatPayload,
+    K: Kernel<T> + LargeStepTunable + Send,
+{
+    render_mlt_with_estimator(
+        targets,
+        make_kernel,
+        settings,
+        MltEstimator::default(),
+        progress,
+        cancel,
+    )
+}
+
+/// As [`render_mlt`], with the estimator's options: with
+/// [`MltEstimator::large_step_mis`] every single-stage chain kernel is wrapped in
+/// `mcmc_core::render_loop::LargeStepMis` (large-step density 1: primary sample space),
+/// weighting with its target's bootstrap `b_d` and the large-step probability of each step
+/// (under automatic control: the initial one during the estimation phase, the estimate
+/// afterwards).
+pub fn render_mlt_with_estimator<T, K>(
+    targets: &[T],
+    make_kernel: impl MakeKernel<K>,
+    settings: &MltSettings,
+    estimator: MltEstimator,
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> MltOutput
@@ -161,6 +206,7 @@ where
         bootstrap_samples: settings.bootstrap_samples.max(1) as u64,
         budget,
         seed: settings.seed,
+        large_step_mis: estimator.large_step_mis,
         ..LoopSettings::default()
     };
     let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
@@ -168,12 +214,20 @@ where
     let (w, h) = (settings.width, settings.height);
     let stage_map = settings.stage_map;
     let sink = || StagedSplats::new(w, h, stage_map);
+    // Primary sample space: the large step is uniform, density 1.
+    let wrap = |slot: ChainSlot, kernel: K| {
+        if Kernel::<T>::stages(&kernel) == 1 {
+            LargeStepMis::for_slot(kernel, slot, 1.0)
+        } else {
+            LargeStepMis::disabled(kernel)
+        }
+    };
     match settings.large_step {
         LargeStepMode::Fixed(p) => {
             let out = RenderLoop {
                 targets,
                 states: &states,
-                kernel: |slot| make_kernel.make(slot, p),
+                kernel: |slot| wrap(slot, make_kernel.make(slot, p)),
                 controller: |_| NoAdaptation,
                 sink,
             }
@@ -196,7 +250,7 @@ where
             let out = RenderLoop {
                 targets,
                 states: &states,
-                kernel: |slot| make_kernel.make(slot, initial),
+                kernel: |slot| wrap(slot, make_kernel.make(slot, initial)),
                 controller: |_| {
                     AutoLargeStep::pooled(total).unwrap_or_else(|_| unreachable!("total >= 1"))
                 },
