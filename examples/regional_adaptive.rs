@@ -14,7 +14,7 @@
 //! renders on one thread: the quadtree would never refine). Here RA-QUADTREE gets the paper's
 //! parameters scaled to the budget (`RegionalAdaptParams::otsu2018_for_budget`, about 100
 //! refinement passes) for the mutation count FIXED reached with the same perturbation, scene,
-//! seed and time, which runs just before it.
+//! seed and time, which runs just before it (`--m-split N` sets `M_split` instead).
 //!
 //! Measured: rRMSE (the paper's metric) and relMSE against the scene's BDPT reference
 //! (`scenes/references/<scene>.exr`, box-downsampled), median over the seeds with the min-max
@@ -30,10 +30,12 @@
 //! (`*_sigma.png`, viridis, log scale 1e-3..1 rad, 3x upscaled), every seed's EXR, `run.json`
 //! and a self-contained `report.html`. docs/methods/regional-adaptive.md reports a run.
 //!
-//! `cargo run --release --example regional_adaptive -- [--time 5] [--seeds 5] [--size 64]
-//! [--threads 1] [--ladder 1,4,15,60] [--ladder-seeds 3] [--ladder-scene glossy-diffuse]
-//! [--out DIR] [--quick] [scene ...]`; `--quick` is a smoke run (0.5 s, 2 seeds, 32 x 32,
-//! ladder 0.25,0.5 s with 1 seed; later flags override it).
+//! `cargo run --release --example regional_adaptive -- [--time 5 | --spp N] [--seeds 5]
+//! [--size 64] [--threads 1] [--m-split N] [--ladder 1,4,15,60] [--ladder-seeds 3]
+//! [--ladder-scene glossy-diffuse] [--out DIR] [--quick] [scene ...]`; `--quick` is a smoke run (0.5 s, 2
+//! seeds, 32 x 32, ladder 0.25,0.5 s with 1 seed; later flags override it); `--spp`: equal
+//! mutations per pixel instead of equal time, to separate a configuration's cost per mutation
+//! from its efficiency per mutation (no ladder; `--ladder-seeds 0` skips it under `--time`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -62,6 +64,10 @@ const PNG_SCALE: usize = 3;
 /// Command-line options.
 struct Options {
     time: f64,
+    /// Equal-sample mode: mutations per pixel instead of `time` (no ladder).
+    spp: Option<u32>,
+    /// RA-QUADTREE's `M_split` instead of the budget-scaled one.
+    m_split: Option<u64>,
     seeds: u64,
     size: u32,
     threads: usize,
@@ -72,9 +78,30 @@ struct Options {
     scenes: Vec<String>,
 }
 
+impl Options {
+    /// The table's budget per render.
+    fn budget(&self) -> MltBudget {
+        match self.spp {
+            Some(n) => MltBudget::MutationsPerPixel(f64::from(n)),
+            None => MltBudget::Time(Duration::from_secs_f64(self.time)),
+        }
+    }
+
+    /// The table's budget in words.
+    fn budget_text(&self) -> String {
+        match self.spp {
+            Some(n) => format!("equal samples: {n} mutations per pixel"),
+            None => format!(
+                "equal time: {} s per render (bootstrap included)",
+                self.time
+            ),
+        }
+    }
+}
+
 fn usage(msg: &str) -> ! {
     eprintln!(
-        "{msg}\nusage: regional_adaptive [--time SECONDS] [--seeds N] [--size PIXELS] [--threads N] \
+        "{msg}\nusage: regional_adaptive [--time SECONDS | --spp N] [--seeds N] [--size PIXELS] [--threads N] [--m-split N] \
          [--ladder T1,T2,..] [--ladder-seeds N] [--ladder-scene NAME] [--out DIR] [--quick] [scene ...]"
     );
     std::process::exit(2)
@@ -83,6 +110,8 @@ fn usage(msg: &str) -> ! {
 fn parse_options() -> Options {
     let mut o = Options {
         time: 5.0,
+        spp: None,
+        m_split: None,
         seeds: 5,
         size: 64,
         threads: 1,
@@ -107,6 +136,24 @@ fn parse_options() -> Options {
             "--time" => {
                 o.time = seconds(&value("--time"))
                     .unwrap_or_else(|| usage("--time needs seconds in (0, 3600]"))
+            }
+            "--spp" => {
+                o.spp = Some(
+                    value("--spp")
+                        .parse()
+                        .ok()
+                        .filter(|n| (1..=1_000_000).contains(n))
+                        .unwrap_or_else(|| usage("--spp needs mutations per pixel in 1..=1000000")),
+                )
+            }
+            "--m-split" => {
+                o.m_split = Some(
+                    value("--m-split")
+                        .parse()
+                        .ok()
+                        .filter(|n| *n >= 1)
+                        .unwrap_or_else(|| usage("--m-split needs visits >= 1")),
+                )
             }
             "--seeds" => {
                 o.seeds = value("--seeds")
@@ -227,16 +274,17 @@ struct RunOutput {
     note: Option<String>,
 }
 
-/// Renders configuration `c` for `time` seconds; `fixed_mutations` is FIXED's mutation count
-/// for the same perturbation, scene, seed and time (RA-QUADTREE's refinement budget).
+/// Renders configuration `c` with `budget`; `fixed_mutations` is FIXED's mutation count for
+/// the same perturbation, scene, seed and budget (RA-QUADTREE's refinement budget).
 fn run_once(
     pool: &rayon::ThreadPool,
     scene: &Scene,
     reference: &Image,
     c: usize,
-    time: f64,
+    budget: MltBudget,
     seed: u64,
     fixed_mutations: Option<u64>,
+    m_split: Option<u64>,
 ) -> RunOutput {
     let (kind, adapt) = CONFIGS[c];
     let mcmc = McmcSettings::default();
@@ -245,7 +293,7 @@ fn run_once(
         height: reference.height,
         chains: mcmc.chains,
         bootstrap_samples: mcmc.bootstrap_samples,
-        budget: MltBudget::Time(Duration::from_secs_f64(time)),
+        budget,
         large_step: LargeStepMode::Fixed(0.0),
         seed,
         streams: 1,
@@ -254,7 +302,7 @@ fn run_once(
     let mut params = pathmlt::adapt_params(adapt, &settings);
     if adapt == PathAdapt::Quadtree {
         let scaled = RegionalAdaptParams::otsu2018_for_budget(fixed_mutations.unwrap_or(1));
-        params.split_after_visits = scaled.split_after_visits;
+        params.split_after_visits = m_split.or(scaled.split_after_visits);
         params.refine_every = scaled.refine_every;
     }
     let load = load_average();
@@ -380,9 +428,10 @@ fn run_table(o: &Options, pool: &rayon::ThreadPool) -> Vec<SceneRuns> {
                     &s.scene,
                     &s.reference,
                     c,
-                    o.time,
+                    o.budget(),
                     seed,
                     fixed_mutations,
+                    o.m_split,
                 );
                 if adapt == PathAdapt::Fixed {
                     fixed_mutations = Some(r.run.mutations);
@@ -460,7 +509,7 @@ fn write_report(o: &Options, s: &SceneRuns) {
         parameters: [
             ("scene", s.name.clone()),
             ("size", format!("{0}x{0}", o.size)),
-            ("budget", format!("{} s per render", o.time)),
+            ("budget", o.budget_text()),
             ("seeds", o.seeds.to_string()),
             ("render threads", o.threads.to_string()),
             ("max depth", MAX_DEPTH.to_string()),
@@ -520,7 +569,8 @@ fn table_markdown(o: &Options, s: &SceneRuns, md: &mut String, csv: &mut String)
                 s.name,
                 perturbation_name(kind),
                 adapt.name(),
-                o.time,
+                o.spp
+                    .map_or_else(|| format!("{}s", o.time), |n| format!("{n}mpp")),
                 r.rrmse,
                 r.relmse,
                 r.mutations,
@@ -572,7 +622,7 @@ fn run_ladder(o: &Options, pool: &rayon::ThreadPool, md: &mut String) -> Vec<Vec
         .map(|_| o.ladder.iter().map(|_| Vec::new()).collect())
         .collect();
     let mut csv =
-        String::from("scene,perturbation,adapt,time_budget_s,seed,rrmse,relmse,mutations,seconds,acceptance,sigma_median,load1\n");
+        String::from("scene,perturbation,adapt,budget,seed,rrmse,relmse,mutations,seconds,acceptance,sigma_median,load1\n");
     for seed in 0..o.ladder_seeds {
         for (t, &time) in o.ladder.iter().enumerate() {
             let mut fixed_mutations = None;
@@ -582,9 +632,10 @@ fn run_ladder(o: &Options, pool: &rayon::ThreadPool, md: &mut String) -> Vec<Vec
                     &scene,
                     &reference,
                     c,
-                    time,
+                    MltBudget::Time(Duration::from_secs_f64(time)),
                     1000 + seed,
                     fixed_mutations,
+                    o.m_split,
                 );
                 if CONFIGS[c].1 == PathAdapt::Fixed {
                     fixed_mutations = Some(r.run.mutations);
@@ -599,7 +650,7 @@ fn run_ladder(o: &Options, pool: &rayon::ThreadPool, md: &mut String) -> Vec<Vec
                 let x = &r.run;
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{time},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{time}s,{},{},{},{},{},{},{},{}",
                     o.ladder_scene,
                     perturbation_name(CONFIGS[c].0),
                     CONFIGS[c].1.name(),
@@ -725,19 +776,21 @@ fn main() {
     let started = Instant::now();
     let load_start = load_average();
     let mut md = format!(
-        "# Regional adaptive MLT\n\nEqual time: {} s per render (bootstrap included), {} seeds, {}x{} pixels, max depth {MAX_DEPTH}, \
+        "# Regional adaptive MLT\n\n{}, {} seeds, {}x{} pixels, max depth {MAX_DEPTH}, \
          256 chains, 100 000 bootstrap samples, {} render thread(s), runs interleaved (for seed: for scene: for configuration). \
-         RA-QUADTREE: M_refine, M_split scaled to FIXED's mutation count of the same slot (otsu2018_for_budget). \
+         RA-QUADTREE: M_refine, M_split scaled to FIXED's mutation count of the same slot (otsu2018_for_budget){}. \
          rRMSE / FIXED: against FIXED of the same perturbation (medians). Commit {}.\n",
-        o.time,
+        o.budget_text(),
         o.seeds,
         o.size,
         o.size,
         o.threads,
+        o.m_split
+            .map_or_else(String::new, |m| format!(", M_split set to {m}")),
         current_commit(".")
     );
     let mut csv = String::from(
-        "scene,perturbation,adapt,time_budget_s,seed,rrmse,relmse,mutations,seconds,acceptance,sigma_median,load1\n",
+        "scene,perturbation,adapt,budget,seed,rrmse,relmse,mutations,seconds,acceptance,sigma_median,load1\n",
     );
     let scenes = run_table(&o, &pool);
     for s in &scenes {
@@ -749,7 +802,7 @@ fn main() {
         .flat_map(|s| s.runs.iter().flatten().map(|r| r.load))
         .collect();
     let table_seconds = started.elapsed().as_secs_f64();
-    if o.ladder_seeds > 0 {
+    if o.ladder_seeds > 0 && o.spp.is_none() {
         let curves = run_ladder(&o, &pool, &mut md);
         if !curves.is_empty() {
             match plot_ladder(&o.out.join("convergence.svg"), &o.ladder_scene, &curves) {
