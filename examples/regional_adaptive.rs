@@ -274,8 +274,17 @@ struct RunOutput {
     note: Option<String>,
 }
 
-/// Renders configuration `c` with `budget`; `fixed_mutations` is FIXED's mutation count for
-/// the same perturbation, scene, seed and budget (RA-QUADTREE's refinement budget).
+/// RA-QUADTREE's refinement parameters for one run.
+#[derive(Clone, Copy, Debug)]
+struct Refinement {
+    /// FIXED's mutation count for the same perturbation, scene, seed and budget: `M_refine`,
+    /// `M_split` are scaled to it.
+    fixed_mutations: Option<u64>,
+    /// `--m-split`: `M_split` instead of the scaled one.
+    m_split: Option<u64>,
+}
+
+/// Renders configuration `c` with `budget`; RA-QUADTREE refines as `refinement` says.
 fn run_once(
     pool: &rayon::ThreadPool,
     scene: &Scene,
@@ -283,8 +292,7 @@ fn run_once(
     c: usize,
     budget: MltBudget,
     seed: u64,
-    fixed_mutations: Option<u64>,
-    m_split: Option<u64>,
+    refinement: Refinement,
 ) -> RunOutput {
     let (kind, adapt) = CONFIGS[c];
     let mcmc = McmcSettings::default();
@@ -301,8 +309,9 @@ fn run_once(
     };
     let mut params = pathmlt::adapt_params(adapt, &settings);
     if adapt == PathAdapt::Quadtree {
-        let scaled = RegionalAdaptParams::otsu2018_for_budget(fixed_mutations.unwrap_or(1));
-        params.split_after_visits = m_split.or(scaled.split_after_visits);
+        let scaled =
+            RegionalAdaptParams::otsu2018_for_budget(refinement.fixed_mutations.unwrap_or(1));
+        params.split_after_visits = refinement.m_split.or(scaled.split_after_visits);
         params.refine_every = scaled.refine_every;
     }
     let load = load_average();
@@ -430,8 +439,10 @@ fn run_table(o: &Options, pool: &rayon::ThreadPool) -> Vec<SceneRuns> {
                     c,
                     o.budget(),
                     seed,
-                    fixed_mutations,
-                    o.m_split,
+                    Refinement {
+                        fixed_mutations,
+                        m_split: o.m_split,
+                    },
                 );
                 if adapt == PathAdapt::Fixed {
                     fixed_mutations = Some(r.run.mutations);
@@ -634,8 +645,10 @@ fn run_ladder(o: &Options, pool: &rayon::ThreadPool, md: &mut String) -> Vec<Vec
                     c,
                     MltBudget::Time(Duration::from_secs_f64(time)),
                     1000 + seed,
-                    fixed_mutations,
-                    o.m_split,
+                    Refinement {
+                        fixed_mutations,
+                        m_split: o.m_split,
+                    },
                 );
                 if CONFIGS[c].1 == PathAdapt::Fixed {
                     fixed_mutations = Some(r.run.mutations);
