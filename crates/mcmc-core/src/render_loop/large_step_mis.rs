@@ -183,12 +183,11 @@ impl<S, P, O: Observer<S, P> + ?Sized> Observer<S, P> for MisObserver<'_, O> {
 }
 
 /// One step of `kernel` with the MIS weights of `c` (`= b p q`, the denominators' large-step
-/// term) and, if `large_extra`, the extra splat of a large step's candidate; shared by
-/// [`LargeStepMis`] and the negative controls of `testing`.
+/// term) and the extra splat of a large step's candidate; shared by [`LargeStepMis`] and the
+/// negative controls of `testing`.
 pub(crate) fn mis_step<T, K, R, O>(
     kernel: &mut K,
     c: f64,
-    large_extra: bool,
     target: &T,
     current: &mut SampleOf<T>,
     scratch: &mut [SampleOf<T>],
@@ -214,7 +213,7 @@ where
         kernel.step(target, current, scratch, rng, &mut mis)
     };
     let log_fy = info.candidate_log_density[0];
-    if large_extra && kernel.is_large_step(info.component) && log_fy.is_finite() {
+    if kernel.is_large_step(info.component) && log_fy.is_finite() {
         // The candidate: swapped into `current` if accepted, still in `scratch[0]` if not.
         let y: &SampleOf<T> = if info.accepted_stage == 1 {
             current
@@ -251,16 +250,7 @@ impl<T: Target, K: Kernel<T> + LargeStepTunable> Kernel<T> for LargeStepMis<K> {
         }
         // The probability this step is drawn with (a controller may change it afterwards).
         let c = self.b_q * self.kernel.large_step_probability();
-        mis_step(
-            &mut self.kernel,
-            c,
-            true,
-            target,
-            current,
-            scratch,
-            rng,
-            observer,
-        )
+        mis_step(&mut self.kernel, c, target, current, scratch, rng, observer)
     }
 
     fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {

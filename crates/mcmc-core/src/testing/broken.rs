@@ -384,16 +384,7 @@ impl<T: Target, K: Kernel<T> + LargeStepTunable> Kernel<T> for MisWithoutLargeSt
         R: Rng + ?Sized,
         O: Observer<T::State, T::Payload> + ?Sized,
     {
-        mis_step(
-            &mut self.0,
-            0.0,
-            true,
-            target,
-            current,
-            scratch,
-            rng,
-            observer,
-        )
+        mis_step(&mut self.0, 0.0, target, current, scratch, rng, observer)
     }
 
     fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
@@ -432,16 +423,7 @@ impl<T: Target, K: Kernel<T> + LargeStepTunable> Kernel<T> for MisWithStaleProba
         O: Observer<T::State, T::Payload> + ?Sized,
     {
         let c = self.b_q * self.p_weights;
-        mis_step(
-            &mut self.kernel,
-            c,
-            true,
-            target,
-            current,
-            scratch,
-            rng,
-            observer,
-        )
+        mis_step(&mut self.kernel, c, target, current, scratch, rng, observer)
     }
 
     fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
