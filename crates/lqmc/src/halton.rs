@@ -124,8 +124,9 @@ pub enum Scrambling {
 pub struct Halton {
     scrambling: Scrambling,
     seed: u64,
-    /// Faure permutations, one per prime base (only for [`Scrambling::Faure`]).
-    faure: Vec<Vec<u16>>,
+    /// Faure permutations, one per prime base (built once per process, shared; empty
+    /// unless [`Scrambling::Faure`]).
+    faure: &'static [Vec<u16>],
 }
 
 impl Halton {
@@ -134,10 +135,13 @@ impl Halton {
     /// scramblings below 256 dimensions).
     #[must_use]
     pub fn new(scrambling: Scrambling, seed: u64) -> Self {
-        let faure = if scrambling == Scrambling::Faure {
-            faure_permutations_for_primes()
+        // Building the permutations of all 256 prime bases (every base up to 1619 on the way)
+        // takes milliseconds: once per process, not per sequence (samplers are made per tile).
+        static FAURE: std::sync::OnceLock<Vec<Vec<u16>>> = std::sync::OnceLock::new();
+        let faure: &'static [Vec<u16>] = if scrambling == Scrambling::Faure {
+            FAURE.get_or_init(faure_permutations_for_primes)
         } else {
-            Vec::new()
+            &[]
         };
         Halton {
             scrambling,

@@ -231,7 +231,7 @@ pub fn render(
             reason: e.to_string(),
         })?;
     match settings.integrator {
-        IntegratorKind::Pt | IntegratorKind::Qmc => {
+        IntegratorKind::Pt | IntegratorKind::Qmc | IntegratorKind::QmcFaure => {
             Ok(pool.install(|| render_pt(scene, settings, start, progress, cancel)))
         }
         IntegratorKind::Lqmc => Ok(pool.install(|| {
@@ -304,6 +304,14 @@ fn render_pt(
     };
     let out = if settings.integrator == IntegratorKind::Qmc {
         crate::integrator::qmc::render_qmc(scene, &pt_settings, progress, cancel)
+    } else if settings.integrator == IntegratorKind::QmcFaure {
+        crate::integrator::qmc::render_qmc_with(
+            scene,
+            &pt_settings,
+            lqmc::Scrambling::Faure,
+            progress,
+            cancel,
+        )
     } else {
         pt_driver::render_pt(scene, &pt_settings, progress, cancel)
     };

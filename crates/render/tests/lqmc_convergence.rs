@@ -27,12 +27,13 @@ use std::sync::OnceLock;
 
 use common::stats::{assert_finite_non_negative, block_means, mean_se, t_critical};
 use common::{analytic_enclosure, enclosure_radiance};
+use lqmc::Scrambling;
 use render::bdpt::{render_bdpt, BdptParams};
 use render::budget::Budget;
 use render::image::Image;
 use render::integrator::lqmc::{render_lqmc, LqmcParams};
 use render::integrator::pt_driver::PtSettings;
-use render::integrator::qmc::render_qmc;
+use render::integrator::qmc::{render_qmc, render_qmc_with};
 use render::scene::Scene;
 use render::session::{render, IntegratorKind, NoProgress, RenderSettings};
 
@@ -42,10 +43,10 @@ const ALPHA_FAMILY: f64 = 0.001;
 const R: usize = 16;
 /// Blocks per side of the regional comparison.
 const BLOCKS: usize = 4;
-/// Null-hypothesis comparisons: enclosure (qmc, lqmc, lqmc exploring NEE); Cornell box,
-/// glass Cornell box and depth-of-field scene, image mean and blocks (the same three; on the
-/// depth-of-field scene also LQMC with every out-of-focus path in the DOF class).
-const N_COMPARISONS: usize = 3 + (3 * 3 + 1) * (1 + BLOCKS * BLOCKS);
+/// Null-hypothesis comparisons: enclosure (qmc, qmc-faure, lqmc, lqmc exploring NEE);
+/// Cornell box, glass Cornell box and depth-of-field scene, image mean and blocks (the same
+/// four; on the depth-of-field scene also LQMC with every out-of-focus path in the DOF class).
+const N_COMPARISONS: usize = 4 + (3 * 4 + 1) * (1 + BLOCKS * BLOCKS);
 
 /// The Bonferroni-corrected two-sided critical value for `R - 1` degrees of freedom.
 fn critical() -> f64 {
@@ -64,6 +65,7 @@ fn explore_all() -> LqmcParams {
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Method {
     Qmc,
+    QmcFaure,
     Lqmc(LqmcParams),
 }
 
@@ -80,6 +82,7 @@ fn dof_everywhere() -> LqmcParams {
 fn name(method: Method) -> &'static str {
     match method {
         Method::Qmc => "qmc",
+        Method::QmcFaure => "qmc-faure",
         Method::Lqmc(p) if p.dof_coc_pixels < 1.0 => "lqmc (DOF class everywhere)",
         Method::Lqmc(p) if p.explore_nee => "lqmc (NEE explored)",
         Method::Lqmc(_) => "lqmc",
@@ -103,6 +106,9 @@ fn replicates(method: Method, scene: &Scene, spp: u32, max_depth: u32, seed0: u6
             let s = pt_settings(scene, spp, max_depth, seed0 + r);
             let image = match method {
                 Method::Qmc => render_qmc(scene, &s, &NoProgress, &cancel).image,
+                Method::QmcFaure => {
+                    render_qmc_with(scene, &s, Scrambling::Faure, &NoProgress, &cancel).image
+                }
                 Method::Lqmc(params) => {
                     let out = render_lqmc(scene, &s, &params, &NoProgress, &cancel);
                     assert_eq!(out.progressions, spp);
@@ -203,6 +209,7 @@ fn enclosure_matches_the_closed_form() {
     let mu = enclosure_radiance(depth);
     for method in [
         Method::Qmc,
+        Method::QmcFaure,
         Method::Lqmc(LqmcParams::default()),
         Method::Lqmc(explore_all()),
     ] {
@@ -227,6 +234,7 @@ fn cornell_box_matches_bdpt() {
     let (scene, reference) = cornell();
     for method in [
         Method::Qmc,
+        Method::QmcFaure,
         Method::Lqmc(LqmcParams::default()),
         Method::Lqmc(explore_all()),
     ] {
@@ -246,6 +254,7 @@ fn glass_cornell_box_matches_bdpt() {
     let (scene, reference) = glass();
     for method in [
         Method::Qmc,
+        Method::QmcFaure,
         Method::Lqmc(LqmcParams::default()),
         Method::Lqmc(explore_all()),
     ] {
@@ -266,6 +275,7 @@ fn dof_scene_matches_bdpt() {
     let (scene, reference) = dof();
     for method in [
         Method::Qmc,
+        Method::QmcFaure,
         Method::Lqmc(LqmcParams::default()),
         Method::Lqmc(explore_all()),
         Method::Lqmc(dof_everywhere()),

@@ -51,10 +51,19 @@ impl HaltonSampler {
     /// A sampler for master seed `seed`, at pixel 0, sample 0.
     #[must_use]
     pub fn new(seed: u64) -> Self {
+        Self::with_scrambling(seed, Scrambling::None)
+    }
+
+    /// The sampler for master seed `seed` over a Halton sequence with digit scrambling
+    /// `scrambling` (still rotated per pixel). [`Scrambling::Faure`] costs a table lookup per
+    /// digit and removes the clustering of plain Halton in bases larger than the pixel's
+    /// sample count (docs/performance.md, "Halton samplers for PT").
+    #[must_use]
+    pub fn with_scrambling(seed: u64, scrambling: Scrambling) -> Self {
         let seed_key = mix64(seed ^ 0x4a1f_0c3b_9e77_d2a5);
         let mut s = Self {
             seed_key,
-            halton: Halton::new(Scrambling::None, seed_key),
+            halton: Halton::new(scrambling, seed_key),
             pixel_key: 0,
             index: 0,
             stream: 0,
@@ -219,6 +228,75 @@ mod tests {
         let a = s.next_2d();
         s.start_pixel_sample(6, 3);
         assert_ne!(a, s.next_2d());
+    }
+
+    /// The first `n` values of dimension `dim` (camera stream) of pixel `pixel`.
+    fn pixel_values(s: &mut HaltonSampler, pixel: u64, dim: usize, n: u64) -> Vec<f64> {
+        (0..n)
+            .map(|i| {
+                s.start_pixel_sample(pixel, i);
+                let mut x = 0.0;
+                for _ in 0..=dim {
+                    x = f64::from(s.next_1d());
+                }
+                x
+            })
+            .collect()
+    }
+
+    /// pbrt-v4's elementary-interval test restated for Halton (bases 2 and 3 in dimensions 0
+    /// and 1): for every `2^a 3^b <= 72`, the first `2^a 3^b` points of a pixel, taken relative
+    /// to point 0 (Halton's point 0 is the origin for plain and Faure digits, so this undoes
+    /// the pixel's rotation), put exactly one point in each `2^-a x 3^-b` box.
+    #[test]
+    fn first_points_of_a_pixel_fill_the_elementary_intervals() {
+        for scrambling in [Scrambling::None, Scrambling::Faure] {
+            let mut s = HaltonSampler::with_scrambling(7, scrambling);
+            for pixel in [0u64, 17, 123_456] {
+                let xs = pixel_values(&mut s, pixel, 0, 72);
+                let ys = pixel_values(&mut s, pixel, 1, 72);
+                for (a, b) in [(0u32, 0u32), (3, 0), (0, 2), (1, 1), (2, 2), (3, 2), (1, 3)] {
+                    let (na, nb) = (2u64.pow(a), 3u64.pow(b));
+                    let n = (na * nb) as usize;
+                    let mut count = vec![0u32; n];
+                    for i in 0..n {
+                        let rel = |v: f64, v0: f64| (v - v0).rem_euclid(1.0);
+                        // A relative tolerance of 1e-5 for the f32 rounding of points that
+                        // lie on a box's lower edge.
+                        let bx = ((rel(xs[i], xs[0]) + 1e-5) * na as f64) as u64 % na;
+                        let by = ((rel(ys[i], ys[0]) + 1e-5) * nb as f64) as u64 % nb;
+                        count[(by * na + bx) as usize] += 1;
+                    }
+                    assert!(
+                        count.iter().all(|&c| c == 1),
+                        "{scrambling:?} pixel {pixel}: 2^{a} x 3^{b} boxes {count:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// What `qmc-faure` is for: in a dimension whose prime base (47, dimension 14) exceeds the
+    /// pixel's 16 samples, plain Halton points cluster on an arc of length 16/47 (a circular
+    /// gap of at least 31/47), Faure-permuted ones spread over the whole interval.
+    #[test]
+    fn faure_digits_spread_the_large_bases_plain_ones_cluster() {
+        let max_gap = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            let wrap = v[0] + 1.0 - v[v.len() - 1];
+            v.windows(2).map(|w| w[1] - w[0]).fold(wrap, f64::max)
+        };
+        for pixel in [3u64, 99] {
+            let plain = max_gap(pixel_values(&mut HaltonSampler::new(5), pixel, 14, 16));
+            let faure = max_gap(pixel_values(
+                &mut HaltonSampler::with_scrambling(5, Scrambling::Faure),
+                pixel,
+                14,
+                16,
+            ));
+            assert!(plain >= 31.0 / 47.0 - 1e-6, "plain gap {plain}");
+            assert!(faure < 0.25, "Faure gap {faure}");
+        }
     }
 
     #[test]

@@ -4,6 +4,7 @@
 
 use std::sync::atomic::AtomicBool;
 
+use lqmc::Scrambling;
 use mcmc_core::Progress;
 
 use super::halton_sampler::HaltonSampler;
@@ -20,13 +21,28 @@ pub fn render_qmc(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> PtOutput {
+    render_qmc_with(scene, settings, Scrambling::None, progress, cancel)
+}
+
+/// [`render_qmc`] over a Halton sequence with digit scrambling `scrambling` (`--integrator
+/// qmc-faure`: [`Scrambling::Faure`]). Plain Halton points of a pixel cluster in every
+/// dimension whose prime base exceeds the pixel's sample count (`i / b` for `i < b` covers
+/// `[0, n / b)`, and the rotation only moves that arc); Faure's permutations spread the
+/// leading digit over the whole interval while keeping every stratification property.
+pub fn render_qmc_with(
+    scene: &Scene,
+    settings: &PtSettings,
+    scrambling: Scrambling,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> PtOutput {
     let seed = settings.seed;
     render_pixel_samples(
         scene,
         settings,
         progress,
         cancel,
-        || HaltonSampler::new(seed),
+        || HaltonSampler::with_scrambling(seed, scrambling),
         HaltonSampler::start_pixel_sample,
     )
 }

@@ -22,6 +22,9 @@ pub enum IntegratorKind {
     /// Halton QMC path tracing: the "Halton points" baseline of Tessari et al.
     /// ([`crate::integrator::qmc`]).
     Qmc,
+    /// Halton QMC path tracing with Faure's digit permutations under the per-pixel rotation
+    /// ([`crate::integrator::qmc`]; issue 17's stratified sampler for PT).
+    QmcFaure,
     /// Local quasi-Monte Carlo exploration of Halton seed paths (Tessari et al.;
     /// [`crate::integrator::lqmc`]).
     Lqmc,
@@ -90,6 +93,12 @@ pub const INTEGRATORS: &[IntegratorInfo] = &[
         description: "path tracing driven by per-pixel Cranley-Patterson-rotated Halton points (the Halton QMC baseline of Tessari et al.)",
         is_mcmc: false,
         kind: IntegratorKind::Qmc,
+    },
+    IntegratorInfo {
+        name: "qmc-faure",
+        description: "qmc with Faure-permuted Halton digits: no clustering in the large prime bases, lower error per sample than pt",
+        is_mcmc: false,
+        kind: IntegratorKind::QmcFaure,
     },
     IntegratorInfo {
         name: "lqmc",
@@ -202,17 +211,17 @@ mod tests {
         // compile here until it is added to `all` (and then needs its row).
         use IntegratorKind::{
             Bdpt, Drmlt, Lqmc, Mala, MalaCache, MalaHybrid, MalaOnline, Mmlt, PathMlt, Pssmlt, Pt,
-            Qmc,
+            Qmc, QmcFaure,
         };
         let all = [
-            Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc, Lqmc, Mala, MalaOnline, MalaCache, MalaHybrid,
-            PathMlt,
+            Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc, QmcFaure, Lqmc, Mala, MalaOnline, MalaCache,
+            MalaHybrid, PathMlt,
         ];
         assert_eq!(all.len(), INTEGRATORS.len());
         for kind in all {
             match kind {
-                Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc | Lqmc | Mala | MalaOnline | MalaCache
-                | MalaHybrid | PathMlt => {
+                Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc | QmcFaure | Lqmc | Mala | MalaOnline
+                | MalaCache | MalaHybrid | PathMlt => {
                     assert_eq!(kind.info().kind, kind)
                 }
             }
