@@ -183,7 +183,12 @@ impl Method {
     }
 
     fn settings(self, size: u32, budget: Budget, seed: u64) -> RenderSettings {
-        let mut mcmc = McmcSettings::default();
+        // The plain estimator, as measured in docs/methods/drmlt.md (PSSMLT's default became
+        // large-step MIS later: issue 17; the DR kernels do not use it).
+        let mut mcmc = McmcSettings {
+            large_step_mis: Some(false),
+            ..McmcSettings::default()
+        };
         let integrator = match self {
             Method::Kelemen => IntegratorKind::Pssmlt,
             Method::Gaussian(sigma) => {

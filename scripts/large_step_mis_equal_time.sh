@@ -5,7 +5,8 @@
 # seed the runs are interleaved (scene, integrator, off/on; the off/on order alternates with the
 # seed) so that a change of machine load hits both settings alike.
 #
-# Usage: scripts/large_step_mis_equal_time.sh REF_DIR [SECONDS] [SEEDS]
+# Usage: [SCENES="a b"] [OUT=dir] scripts/large_step_mis_equal_time.sh REF_DIR [SECONDS] [SEEDS]
+#   (default scenes: cornell-glass caustic-pool; default OUT: out/large_step_mis)
 #   REF_DIR holds <scene>.exr references at 64x64, e.g. rendered with
 #   target/release/chainlight render scenes/<scene>.gltf --integrator bdpt --spp 8192 \
 #       --width 64 --height 64 --max-depth 5 --seed 1 --threads 2 -o REF_DIR/<scene>.exr
@@ -16,15 +17,19 @@ refs="$1"
 secs="${2:-5}"
 seeds="${3:-7}"
 out="${OUT:-out/large_step_mis}"
+scenes="${SCENES:-cornell-glass caustic-pool}"
 mkdir -p "$out"
 cargo build --release --quiet
-bin=target/release/chainlight
+# A private copy: a concurrent `cargo build` must not replace the binary mid-measurement.
+bin="$out/chainlight"
+cp target/release/chainlight "$bin"
+git rev-parse --short HEAD | sed 's/^/# commit /'
 results="$out/results.txt"
 : > "$results"
 echo "# start $(date -u '+%Y-%m-%d %H:%M:%S UTC'), loadavg $(cat /proc/loadavg)"
 for seed in $(seq 0 $((seeds - 1))); do
     if (( seed % 2 == 0 )); then order="off on"; else order="on off"; fi
-    for scene in cornell-glass caustic-pool; do
+    for scene in $scenes; do
         for integ in pssmlt mmlt; do
             for mis in $order; do
                 img="$out/$scene-$integ-$mis-$seed.exr"
@@ -47,7 +52,7 @@ groups = {}
 for scene, integ, mis, seed, rel, samples in rows:
     groups.setdefault((scene, integ, mis), []).append((float(rel), int(samples)))
 print("scene integrator | median relMSE off | on | on/off | median mutations off | on | runs")
-for scene in ("cornell-glass", "caustic-pool"):
+for scene in dict.fromkeys(r[0] for r in rows):
     for integ in ("pssmlt", "mmlt"):
         off = groups[(scene, integ, "off")]
         on = groups[(scene, integ, "on")]

@@ -81,10 +81,11 @@ pub(crate) struct RenderArgs {
     large_step: LargeStepMode,
     /// pssmlt, mmlt: `on` combines the large-step samples with the Metropolis estimator by
     /// multiple importance sampling (Kelemen et al. 2002, section 4; LuxCore's METROPOLIS
-    /// sampler), `off` uses the plain expected-value estimator.
-    #[arg(long, value_name = "on|off", default_value = "off", value_parser = parse::on_off,
+    /// sampler), `off` uses the plain expected-value estimator [default: on for pssmlt, off
+    /// for mmlt].
+    #[arg(long, value_name = "on|off", value_parser = parse::on_off,
           action = clap::ArgAction::Set)]
-    large_step_mis: bool,
+    large_step_mis: Option<bool>,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
     /// al. 2002) or `gaussian=SIGMA` with SIGMA in (0, 10] (pbrt-v3 uses gaussian=0.01).
     #[arg(long, value_name = "kelemen|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]

@@ -51,9 +51,11 @@ pub struct McmcSettings {
     pub adapt: crate::mlt::pathmlt::PathAdapt,
     /// PSSMLT and MMLT: combine the large-step samples with the Metropolis estimator by
     /// multiple importance sampling (Kelemen et al. 2002, section 4; LuxCore's METROPOLIS
-    /// sampler; [`crate::mlt::MltEstimator::large_step_mis`]). Default off (measured in
-    /// docs/performance.md, "Equal-time efficiency (issue 17)"). Other integrators ignore it.
-    pub large_step_mis: bool,
+    /// sampler; [`crate::mlt::MltEstimator::large_step_mis`]). `None` (default): the
+    /// integrator's measured default, [`large_step_mis_default`] (on for PSSMLT, off for
+    /// MMLT; docs/performance.md, "Equal-time efficiency (issue 17)"). Other integrators
+    /// ignore it.
+    pub large_step_mis: Option<bool>,
 }
 
 impl Default for McmcSettings {
@@ -68,9 +70,19 @@ impl Default for McmcSettings {
             mala: MalaConfig::default(),
             perturbation: pathspace::PerturbationKind::Lens,
             adapt: crate::mlt::pathmlt::PathAdapt::Fixed,
-            large_step_mis: false,
+            large_step_mis: None,
         }
     }
+}
+
+/// Whether `integrator` combines its large steps with the Metropolis estimator by default
+/// ([`McmcSettings::large_step_mis`]): on for PSSMLT, where it lowered the median equal-time
+/// relMSE on three of four scenes (x0.66 cornell-glass, x0.77 glossy-highlight, x0.91
+/// ajar-door, x1.00 caustic-pool); off for MMLT, where it won on two and lost on two (x0.94,
+/// x0.91, x1.14, x1.07). docs/performance.md, "Equal-time efficiency (issue 17)".
+#[must_use]
+pub const fn large_step_mis_default(integrator: IntegratorKind) -> bool {
+    matches!(integrator, IntegratorKind::Pssmlt)
 }
 
 /// Default mutations per chain in the estimation phase of automatic large-step control.
@@ -465,10 +477,11 @@ fn render_bidirectional(
             }
         }
     } else {
-        let estimator = mlt::MltEstimator {
-            large_step_mis: m.large_step_mis,
-        };
-        if m.large_step_mis {
+        let large_step_mis = m
+            .large_step_mis
+            .unwrap_or(large_step_mis_default(settings.integrator));
+        let estimator = mlt::MltEstimator { large_step_mis };
+        if large_step_mis {
             notes.push(
                 "large-step MIS (Kelemen et al. 2002, section 4): large steps also weighted as independent samples"
                     .to_owned(),

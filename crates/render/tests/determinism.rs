@@ -101,7 +101,7 @@ fn large_step_mis_is_bit_identical() {
                 let mut s = settings(24, 16, threads, 13);
                 s.integrator = integrator;
                 s.mcmc.large_step = large_step;
-                s.mcmc.large_step_mis = true;
+                s.mcmc.large_step_mis = Some(true);
                 s
             };
             let reference = run(&scene, &with(1));

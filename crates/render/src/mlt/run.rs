@@ -139,8 +139,10 @@ pub struct MltEstimator {
     /// weight `(a + 1) / (f/b_d + p)`, every other splat with its expected-value weight
     /// over `f/b_d + p` (in the loop's units: times `f / (f + b_d p)`), `b_d` the bootstrap
     /// estimate of the chain's target (MMLT: of its depth), `p` the large-step probability
-    /// of that step. Default off (docs/performance.md, "Equal-time efficiency (issue 17)",
-    /// has the measurement). Two-stage (delayed-rejection) kernels ignore it.
+    /// of that step. Default off here; the session turns it on for PSSMLT
+    /// (`crate::session::large_step_mis_default`; docs/performance.md, "Equal-time
+    /// efficiency (issue 17)", has the measurement). Two-stage (delayed-rejection) kernels
+    /// ignore it.
     pub large_step_mis: bool,
 }
 
