@@ -964,3 +964,47 @@ fn drmlt_flags() {
         &["--dr-on", "pssmlt or mmlt"],
     );
 }
+
+/// `--large-step-mis`: on by default for pssmlt, off for mmlt (docs/performance.md, "Equal-time
+/// efficiency (issue 17)"); `on` / `off` override it, and the render says when it is on.
+#[test]
+fn large_step_mis_defaults_per_integrator_and_can_be_set() {
+    let dir = temp_dir("large-step-mis");
+    let out = dir.join("mis.exr");
+    for (integrator, flag, expect_on) in [
+        ("pssmlt", None, true),
+        ("pssmlt", Some("off"), false),
+        ("mmlt", None, false),
+        ("mmlt", Some("on"), true),
+    ] {
+        let mut args = vec![
+            "render",
+            "--integrator",
+            integrator,
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--bootstrap-samples",
+            "2000",
+            "--chains",
+            "16",
+            "-o",
+            path_str(&out),
+        ];
+        if let Some(value) = flag {
+            args.extend(["--large-step-mis", value]);
+        }
+        let output = chainlight(&args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let text = format!("{}{}", stdout(&output), stderr(&output));
+        assert_eq!(
+            text.contains("large-step MIS"),
+            expect_on,
+            "{integrator} {flag:?}: {text}"
+        );
+        assert!(read_exr(&out).unwrap().mean_luminance() > 0.0);
+    }
+}
