@@ -39,7 +39,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
 use common::stats::{
-    assert_finite_non_negative, block_t, mean_se, pixel_mean_and_var_of_mean, rounded, t_critical,
+    assert_finite_non_negative, block_t, mean_se, relmse_observed_and_expected, rounded, t_critical,
 };
 use common::{analytic_enclosure, enclosure_radiance, ENCLOSURE_ALBEDO, ENCLOSURE_LE};
 use glam::{Mat4, Vec3, Vec3A};
@@ -48,7 +48,6 @@ use mcmc_core::{Mh, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
-use render::metrics::{relmse, RELMSE_EPSILON};
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::mala::{self, MalaConfig, MalaVariant};
 use render::mlt::{
@@ -442,17 +441,7 @@ fn cornell_case(method: Method, seed0: u64, mutations_per_pixel: f64) {
     // 3 x expected holds with a wide margin when unbiased, while a per-pixel bias adds
     // bias^2 / (R^2 + eps) and fails it once the mean squared relative bias exceeds twice the
     // noise. The constant 1e-6 only matters if the expected value were ~0.
-    let (mlt_mean, mlt_var) = pixel_mean_and_var_of_mean(&images);
-    let (ref_mean, ref_var) = pixel_mean_and_var_of_mean(reference);
-    let observed = relmse(&mlt_mean, &ref_mean).unwrap();
-    let mut expected = 0.0;
-    for ((v_mlt, v_ref), r) in mlt_var.iter().zip(&ref_var).zip(&ref_mean.pixels) {
-        for c in 0..3 {
-            let r = f64::from(r[c]);
-            expected += (v_mlt[c] + v_ref[c]) / (r * r + RELMSE_EPSILON);
-        }
-    }
-    expected /= (3 * mlt_var.len()) as f64;
+    let (observed, expected) = relmse_observed_and_expected(&images, reference);
     eprintln!(
         "cornell {method:?}: relMSE observed {observed:.3e} expected {expected:.3e} ratio {:.2}",
         observed / expected

@@ -102,6 +102,24 @@ pub fn pixel_mean_and_var_of_mean(images: &[Image]) -> (Image, Vec<[f64; 3]>) {
     (mean, var)
 }
 
+/// The relMSE between the replicate means of `images` and of `reference`, and its expectation
+/// if both are unbiased: the mean over pixels and channels of `(var_images + var_reference) /
+/// (R^2 + eps)`, the variances of the two means estimated from the replicates.
+pub fn relmse_observed_and_expected(images: &[Image], reference: &[Image]) -> (f64, f64) {
+    let (mlt_mean, mlt_var) = pixel_mean_and_var_of_mean(images);
+    let (ref_mean, ref_var) = pixel_mean_and_var_of_mean(reference);
+    let observed = relmse(&mlt_mean, &ref_mean).unwrap();
+    let mut expected = 0.0;
+    for ((v_mlt, v_ref), r) in mlt_var.iter().zip(&ref_var).zip(&ref_mean.pixels) {
+        for c in 0..3 {
+            let r = f64::from(r[c]);
+            expected += (v_mlt[c] + v_ref[c]) / (r * r + RELMSE_EPSILON);
+        }
+    }
+    expected /= (3 * mlt_var.len()) as f64;
+    (observed, expected)
+}
+
 pub fn rounded(xs: &[f64]) -> Vec<f64> {
     xs.iter().map(|x| (x * 100.0).round() / 100.0).collect()
 }
@@ -149,17 +167,7 @@ pub fn against_reference(
         rounded(&t_blocks),
         t_blocks.iter().map(|t| t.abs()).fold(0.0, f64::max)
     );
-    let (mlt_mean, mlt_var) = pixel_mean_and_var_of_mean(images);
-    let (ref_mean, ref_var) = pixel_mean_and_var_of_mean(reference);
-    let observed = relmse(&mlt_mean, &ref_mean).unwrap();
-    let mut expected = 0.0;
-    for ((v_mlt, v_ref), r) in mlt_var.iter().zip(&ref_var).zip(&ref_mean.pixels) {
-        for c in 0..3 {
-            let r = f64::from(r[c]);
-            expected += (v_mlt[c] + v_ref[c]) / (r * r + RELMSE_EPSILON);
-        }
-    }
-    expected /= (3 * mlt_var.len()) as f64;
+    let (observed, expected) = relmse_observed_and_expected(images, reference);
     eprintln!(
         "{what}: relMSE observed {observed:.3e} expected {expected:.3e} ratio {:.2}",
         observed / expected
