@@ -41,7 +41,7 @@ use pss::{LargeStep, Pending, PssState, PssmltProposal, SmallMutation, SmallStep
 use rand::Rng;
 
 use super::{MmltTarget, PathPayload, PATH_STREAMS};
-use crate::bdpt::diff::{evaluate_strategy, Dual, Evaluation};
+use crate::bdpt::diff::{DiffScene, Dual, Evaluation};
 
 /// The MALA variant of `--integrator mala*`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -174,6 +174,8 @@ pub struct DifferentiableMmlt<'s> {
     target: MmltTarget<'s>,
     h: f64,
     method: GradientMethod,
+    /// The scene for the dual evaluator, if it supports it (checked once).
+    diff: Option<DiffScene<'s>>,
 }
 
 impl<'s> DifferentiableMmlt<'s> {
@@ -185,6 +187,7 @@ impl<'s> DifferentiableMmlt<'s> {
             target,
             h: h.clamp(1e-7, 1e-2),
             method: GradientMethod::Dual,
+            diff: DiffScene::new(target.parts().0),
         }
     }
 
@@ -219,11 +222,13 @@ impl<'s> DifferentiableMmlt<'s> {
     }
 
     fn dual_lanes<const N: usize>(&self, x: &PssState, n: usize, grad: &mut Vec<f64>) -> bool {
-        let (scene, params, size) = self.target.parts();
+        let Some(diff) = &self.diff else {
+            return false;
+        };
+        let (_, params, size) = self.target.parts();
         let counts = x.read_counts();
         let lanes = [0, counts[0], counts[0] + counts[1]];
-        let e = evaluate_strategy::<Dual<N>>(
-            scene,
+        let e = diff.evaluate::<Dual<N>>(
             self.target.depth(),
             size,
             params.heuristic,

@@ -112,12 +112,84 @@ pub fn scene_supported(scene: &Scene) -> bool {
             .any(|m| m.normal_texture.is_some() || m.metallic_roughness_texture.is_some())
 }
 
-/// Evaluates the multiplexed-MLT strategy of `depth` selected by the primary samples
-/// `values` (interleaved over `streams` streams as `pss::PssState::raw_values`: stream `s`'s
-/// `k`-th number at `s + streams k`) for an image of `image_size` pixels. Number `k` of stream
-/// `s` becomes `make(value, lanes[s] + k)`: `|v, _| v` for `f64`, [`Dual::variable`] for the
-/// gradient with respect to the numbers in `pss::langevin::PssCoordinates` order (`lanes` =
-/// the prefix sums of the read counts).
+/// A scene the evaluator supports ([`scene_supported`], checked once here, not per path), with
+/// its camera restated over [`Real`].
+#[derive(Clone, Copy)]
+pub struct DiffScene<'s> {
+    ctx: path::Ctx<'s>,
+}
+
+impl std::fmt::Debug for DiffScene<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DiffScene").finish_non_exhaustive()
+    }
+}
+
+impl<'s> DiffScene<'s> {
+    /// `scene` if the evaluator supports it.
+    #[must_use]
+    pub fn new(scene: &'s Scene) -> Option<Self> {
+        scene_supported(scene).then(|| Self {
+            ctx: path::Ctx {
+                scene,
+                camera: geometry::Camera::new(scene.camera().params()),
+            },
+        })
+    }
+
+    /// Evaluates the multiplexed-MLT strategy of `depth` selected by the primary samples
+    /// `values` (interleaved over `streams` streams as `pss::PssState::raw_values`: stream
+    /// `s`'s `k`-th number at `s + streams k`) for an image of `image_size` pixels. Number `k`
+    /// of stream `s` becomes `make(value, lanes[s] + k)`: `|v, _| v` for `f64`,
+    /// [`Dual::variable`] for the gradient with respect to the numbers in
+    /// `pss::langevin::PssCoordinates` order (`lanes` = the prefix sums of the read counts).
+    #[allow(clippy::too_many_arguments)]
+    pub fn evaluate<T: Real>(
+        &self,
+        depth: u32,
+        image_size: Vec2,
+        heuristic: MisHeuristic,
+        values: &[f64],
+        streams: usize,
+        lanes: [usize; 3],
+        make: fn(f64, usize) -> T,
+    ) -> Evaluation<T> {
+        if streams == 0 {
+            return Evaluation::Unsupported;
+        }
+        let mut u = path::Replay {
+            values,
+            streams,
+            lanes,
+            make,
+            stream: 0,
+            cursor: [0; 3],
+            overrun: false,
+            decisions: 0,
+        };
+        let r = self
+            .ctx
+            .sample_strategy(&mut u, depth as usize, image_size, heuristic);
+        if u.overrun {
+            return Evaluation::Unsupported;
+        }
+        let reads = u.cursor;
+        match r {
+            Ok((rgb, s, t)) => Evaluation::Contribution {
+                rgb,
+                s,
+                t,
+                reads,
+                decisions: u.decisions,
+            },
+            Err(path::Stop::Zero) => Evaluation::Zero { reads },
+            Err(path::Stop::Unsupported) => Evaluation::Unsupported,
+        }
+    }
+}
+
+/// [`DiffScene::evaluate`] for a scene checked on every call (tests, one-off evaluations; a
+/// sampler evaluating many paths keeps a [`DiffScene`]).
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_strategy<T: Real>(
     scene: &Scene,
@@ -129,37 +201,7 @@ pub fn evaluate_strategy<T: Real>(
     lanes: [usize; 3],
     make: fn(f64, usize) -> T,
 ) -> Evaluation<T> {
-    if streams == 0 || !scene_supported(scene) {
-        return Evaluation::Unsupported;
-    }
-    let ctx = path::Ctx {
-        scene,
-        camera: geometry::Camera::new(scene.camera().params()),
-    };
-    let mut u = path::Replay {
-        values,
-        streams,
-        lanes,
-        make,
-        stream: 0,
-        cursor: [0; 3],
-        overrun: false,
-        decisions: 0,
-    };
-    let r = ctx.sample_strategy(&mut u, depth as usize, image_size, heuristic);
-    if u.overrun {
-        return Evaluation::Unsupported;
-    }
-    let reads = u.cursor;
-    match r {
-        Ok((rgb, s, t)) => Evaluation::Contribution {
-            rgb,
-            s,
-            t,
-            reads,
-            decisions: u.decisions,
-        },
-        Err(path::Stop::Zero) => Evaluation::Zero { reads },
-        Err(path::Stop::Unsupported) => Evaluation::Unsupported,
-    }
+    DiffScene::new(scene).map_or(Evaluation::Unsupported, |d| {
+        d.evaluate(depth, image_size, heuristic, values, streams, lanes, make)
+    })
 }

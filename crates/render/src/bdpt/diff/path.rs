@@ -207,6 +207,7 @@ impl<T: Real> Vertex<T> {
 }
 
 /// The scene as the evaluator sees it.
+#[derive(Clone, Copy)]
 pub(super) struct Ctx<'s> {
     pub(super) scene: &'s Scene,
     pub(super) camera: Camera,
