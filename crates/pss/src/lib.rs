@@ -5,7 +5,8 @@
 //! on paths. This crate provides the PSS state ([`PssState`]: lazily grown, with separate
 //! streams and cheap copies), the mutations as `mcmc_core` proposals with exact densities
 //! ([`SmallStep`] with Kelemen's exponential or a Gaussian kernel, [`LargeStep`], and their
-//! mixture [`PssmltProposal`] whose large-step probability a controller may tune).
+//! mixture [`PssmltProposal`] whose large-step probability a controller may tune; optionally
+//! with [`RasterStep`]s, an image-plane mutation after LuxCore's, [`RasterParams`]).
 //!
 //! [`FreshPss`] supplies independent points to `mcmc_core::render_loop`, so a renderer that
 //! implements one `mcmc_core::Target` over [`PssState`] gets PSSMLT with bootstrap, chain
@@ -31,6 +32,7 @@ mod on_layout;
 pub mod orbital;
 mod pairwise;
 mod proposal;
+mod raster;
 mod state;
 #[cfg(feature = "testing")]
 pub mod testing;
@@ -46,4 +48,5 @@ pub use pairwise::{
     DRMLT2020_RADIUS_SCALE,
 };
 pub use proposal::{LargeStep, PssmltProposal, SmallStep, ALL_STREAMS};
+pub use raster::{RasterParams, RasterStep, RASTER_DEFAULT_PROBABILITY};
 pub use state::{Pending, PssState, MAX_STREAMS};

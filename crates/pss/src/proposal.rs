@@ -5,6 +5,7 @@ use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
 use crate::mutation::SmallMutation;
+use crate::raster::RasterStep;
 use crate::state::{Pending, PssState};
 use crate::PssError;
 
@@ -106,11 +107,21 @@ impl Proposal<PssState> for LargeStep {
 /// (Kelemen et al. 2002, section 4). Component 0 is the small step, component 1 the large
 /// step. Both are symmetric and the selection does not depend on the state, so the Hastings
 /// term is 0. `p_large` is tunable (automatic large-step control).
+///
+/// Optionally ([`PssmltProposal::with_raster`], off by default) a fraction `q` of the small
+/// steps are raster steps ([`RasterStep`], component 2: LuxCore's image mutation, read as a
+/// separate move; [`crate::RasterParams`]). The mixture density is then
+/// `(1 - p_large) (1 - q) q_small + p_large + (1 - p_large) q q_raster`, still symmetric.
+/// With `q = 0` the proposal draws exactly the random numbers it drew without the option.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PssmltProposal {
     /// The small step.
     pub small: SmallStep,
     p_large: f64,
+    /// The raster step (its catch-up kernel is replaced by `small`'s when used).
+    raster: Option<RasterStep>,
+    /// Fraction of the non-large steps that are raster steps.
+    raster_probability: f64,
 }
 
 impl PssmltProposal {
@@ -123,7 +134,47 @@ impl PssmltProposal {
                 allowed: "[0, 1]",
             });
         }
-        Ok(Self { small, p_large })
+        Ok(Self {
+            small,
+            p_large,
+            raster: None,
+            raster_probability: 0.0,
+        })
+    }
+
+    /// The same mixture in which a fraction `probability` (in `[0, 1]`) of the small steps are
+    /// `raster` steps (component 2). `raster`'s catch-up kernel is ignored: the raster step
+    /// catches stale coordinates up with this proposal's small-step kernel, the one that left
+    /// them stale. Probability 0 turns the option off.
+    pub fn with_raster(mut self, raster: RasterStep, probability: f64) -> Result<Self, PssError> {
+        if !(0.0..=1.0).contains(&probability) {
+            return Err(PssError::InvalidParameter {
+                name: "raster probability",
+                value: probability.to_string(),
+                allowed: "[0, 1]",
+            });
+        }
+        self.raster = (probability > 0.0).then_some(raster);
+        self.raster_probability = if self.raster.is_some() {
+            probability
+        } else {
+            0.0
+        };
+        Ok(self)
+    }
+
+    /// The raster step actually taken: `raster` with `small`'s kernel as catch-up.
+    fn raster_step(&self) -> Option<RasterStep> {
+        self.raster.map(|r| RasterStep {
+            catch_up: self.small.mutation,
+            ..r
+        })
+    }
+
+    /// Fraction of the non-large steps that are raster steps (0: off).
+    #[must_use]
+    pub fn raster_probability(&self) -> f64 {
+        self.raster_probability
     }
 
     /// Kelemen et al. 2002's exponential small step (`s1 = 1/1024`, `s2 = 1/64`, section 4.1)
@@ -134,6 +185,8 @@ impl PssmltProposal {
         Self {
             small: SmallStep::new(SmallMutation::Kelemen(crate::KelemenParams::kelemen2002())),
             p_large: 0.3,
+            raster: None,
+            raster_probability: 0.0,
         }
     }
 
@@ -143,6 +196,8 @@ impl PssmltProposal {
         Self {
             small: SmallStep::new(SmallMutation::Gaussian { sigma: 0.01 }),
             p_large: 0.3,
+            raster: None,
+            raster_probability: 0.0,
         }
     }
 
@@ -155,17 +210,23 @@ impl PssmltProposal {
 
 impl Proposal<PssState> for PssmltProposal {
     fn propose<R: Rng + ?Sized>(&self, x: &PssState, y: &mut PssState, rng: &mut R) -> Proposed {
-        if rng.random::<f64>() < self.p_large {
-            LargeStep.propose(x, y, rng).with_component(1)
-        } else {
-            self.small.propose(x, y, rng)
+        // One uniform selects the component: [0, p) large, [p, p + (1 - p) q) raster, the
+        // rest small (with q = 0 exactly the draws of the mixture without raster steps).
+        let u = rng.random::<f64>();
+        if u < self.p_large {
+            return LargeStep.propose(x, y, rng).with_component(1);
         }
+        if let Some(raster) = self.raster_step() {
+            if u < self.p_large + (1.0 - self.p_large) * self.raster_probability {
+                return raster.propose(x, y, rng).with_component(2);
+            }
+        }
+        self.small.propose(x, y, rng)
     }
 
     fn log_q(&self, from: &PssState, to: &PssState) -> f64 {
-        let small = (1.0 - self.p_large) * self.small.log_q(from, to).exp();
-        let large = self.p_large * LargeStep.log_q(from, to).exp();
-        (small + large).ln()
+        let terms: [f64; 3] = std::array::from_fn(|j| self.log_q_component(j, from, to));
+        mcmc_core::proposal::log_sum_exp(&terms)
     }
 
     fn is_symmetric(&self) -> bool {
@@ -173,13 +234,22 @@ impl Proposal<PssState> for PssmltProposal {
     }
 
     fn num_components(&self) -> usize {
-        2
+        if self.raster.is_some() {
+            3
+        } else {
+            2
+        }
     }
 
     fn log_q_component(&self, j: usize, from: &PssState, to: &PssState) -> f64 {
+        let q = self.raster_probability;
         match j {
-            0 => (1.0 - self.p_large).ln() + self.small.log_q(from, to),
-            _ => self.p_large.ln() + LargeStep.log_q(from, to),
+            0 => (1.0 - self.p_large).ln() + (1.0 - q).ln() + self.small.log_q(from, to),
+            1 => self.p_large.ln() + LargeStep.log_q(from, to),
+            _ => match self.raster_step() {
+                Some(r) => (1.0 - self.p_large).ln() + q.ln() + r.log_q(from, to),
+                None => f64::NEG_INFINITY,
+            },
         }
     }
 }
