@@ -1008,3 +1008,61 @@ fn large_step_mis_defaults_per_integrator_and_can_be_set() {
         assert!(read_exr(&out).unwrap().mean_luminance() > 0.0);
     }
 }
+
+/// `--raster-mutation off|on|P` (issue 17, item 2): off by default; `on` is
+/// `pss::RASTER_DEFAULT_PROBABILITY`; the render says when raster steps are taken; a bad value
+/// names the flag.
+#[test]
+fn raster_mutation_flag_sets_the_probability() {
+    let dir = temp_dir("raster-mutation");
+    let out = dir.join("raster.exr");
+    for (integrator, flag, expect) in [
+        ("pssmlt", None, None),
+        ("pssmlt", Some("on"), Some("raster mutation: 0.25 ")),
+        ("mmlt", Some("0.5"), Some("raster mutation: 0.5 ")),
+        ("pssmlt", Some("off"), None),
+    ] {
+        let mut args = vec![
+            "render",
+            "--integrator",
+            integrator,
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--bootstrap-samples",
+            "2000",
+            "--chains",
+            "16",
+            "-o",
+            path_str(&out),
+        ];
+        if let Some(value) = flag {
+            args.extend(["--raster-mutation", value]);
+        }
+        let output = chainlight(&args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let text = format!("{}{}", stdout(&output), stderr(&output));
+        match expect {
+            Some(note) => assert!(text.contains(note), "{integrator} {flag:?}: {text}"),
+            None => assert!(!text.contains("raster mutation"), "{flag:?}: {text}"),
+        }
+        assert!(read_exr(&out).unwrap().mean_luminance() > 0.0);
+    }
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "pssmlt",
+            "--raster-mutation",
+            "1.5",
+        ],
+        &[
+            "--raster-mutation",
+            "expected `off`, `on` or a probability",
+            "1.5",
+        ],
+    );
+}

@@ -241,3 +241,18 @@ pub(crate) fn dr_on(text: &str) -> Result<render::mlt::dr::DrBase, String> {
         _ => Err(format!("expected pssmlt or mmlt, got '{text}'")),
     }
 }
+
+/// Parses `--raster-mutation`: `off`, `on` (probability [`pss::RASTER_DEFAULT_PROBABILITY`])
+/// or the probability `P` in 0..=1 that a small step is a raster step.
+pub(crate) fn raster_mutation(text: &str) -> Result<f64, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "off" => Ok(0.0),
+        "on" => Ok(pss::RASTER_DEFAULT_PROBABILITY),
+        t => match t.parse::<f64>() {
+            Ok(p) if (0.0..=1.0).contains(&p) => Ok(p),
+            _ => Err(format!(
+                "expected `off`, `on` or a probability in 0..=1, got '{text}'"
+            )),
+        },
+    }
+}

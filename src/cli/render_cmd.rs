@@ -86,6 +86,11 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "on|off", value_parser = parse::on_off,
           action = clap::ArgAction::Set)]
     large_step_mis: Option<bool>,
+    /// pssmlt, mmlt: raster (image-plane) mutation after LuxCore's: with probability P a small
+    /// step moves only the two raster numbers, by 1 pixel to 10% of the image (Kelemen-style,
+    /// log-uniform per axis); `on` is P = 0.25 [default: off].
+    #[arg(long, value_name = "off|on|P", default_value = "off", value_parser = parse::raster_mutation)]
+    raster_mutation: f64,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
     /// al. 2002) or `gaussian=SIGMA` with SIGMA in (0, 10] (pbrt-v3 uses gaussian=0.01).
     #[arg(long, value_name = "kelemen|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]
@@ -268,6 +273,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             perturbation: args.perturbation,
             adapt: args.adapt,
             large_step_mis: args.large_step_mis,
+            raster: pss::RasterParams::with_probability(args.raster_mutation),
         },
         strategy_images: args.strategy_images,
     }

@@ -56,6 +56,12 @@ pub struct McmcSettings {
     /// MMLT; docs/performance.md, "Equal-time efficiency (issue 17)"). Other integrators
     /// ignore it.
     pub large_step_mis: Option<bool>,
+    /// PSSMLT and MMLT: raster (image-plane) mutation, LuxCore's image mutation read as a
+    /// separate move ([`pss::RasterParams`], [`pss::RasterStep`]): with probability
+    /// `raster.probability` a small step moves only the two raster numbers of the camera
+    /// stream. Default off (docs/performance.md, "Raster mutation (issue 17, item 2)").
+    /// Other integrators ignore it.
+    pub raster: pss::RasterParams,
 }
 
 impl Default for McmcSettings {
@@ -71,6 +77,7 @@ impl Default for McmcSettings {
             perturbation: pathspace::PerturbationKind::Lens,
             adapt: crate::mlt::pathmlt::PathAdapt::Fixed,
             large_step_mis: None,
+            raster: pss::RasterParams::off(),
         }
     }
 }
@@ -401,9 +408,16 @@ fn render_bidirectional(
         stage_map: settings.integrator == IntegratorKind::Drmlt,
     };
     let small = SmallStep::new(m.small_step);
+    let raster = pss::RasterStep::for_image(&m.raster, w, h, m.small_step);
+    let raster_probability = if m.raster.is_off() {
+        0.0
+    } else {
+        m.raster.probability.min(1.0)
+    };
     let kernel = |p: f64| {
         Mh::new(
             PssmltProposal::new(small, p.clamp(0.0, 1.0))
+                .and_then(|k| k.with_raster(raster, raster_probability))
                 .unwrap_or_else(|_| unreachable!("clamped")),
         )
     };
@@ -486,6 +500,12 @@ fn render_bidirectional(
                 "large-step MIS (Kelemen et al. 2002, section 4): large steps also weighted as independent samples"
                     .to_owned(),
             );
+        }
+        if raster_probability > 0.0 {
+            notes.push(format!(
+                "raster mutation: {raster_probability} of the small steps move only the raster position ({} px to {} of the image; LuxCore's image mutation)",
+                m.raster.min_pixels, m.raster.max_fraction
+            ));
         }
         if settings.integrator == IntegratorKind::Mmlt {
             let targets = MmltTarget::all_depths(scene, params, w, h);
