@@ -200,6 +200,18 @@ pub(crate) fn on_off(text: &str) -> Result<bool, String> {
     }
 }
 
+/// `--chain-allocation`: `joint` or `per-depth`.
+pub(crate) fn chain_allocation(
+    text: &str,
+) -> Result<mcmc_core::render_loop::ChainAllocation, String> {
+    use mcmc_core::render_loop::ChainAllocation;
+    match text.trim().to_ascii_lowercase().as_str() {
+        "joint" => Ok(ChainAllocation::Joint),
+        "per-depth" => Ok(ChainAllocation::PerTarget),
+        _ => Err(format!("expected joint or per-depth, got '{text}'")),
+    }
+}
+
 /// Parses `--mala-gradient`.
 pub(crate) fn mala_gradient(text: &str) -> Result<render::mlt::mala::GradientMethod, String> {
     let t = text.trim().to_ascii_lowercase();

@@ -86,6 +86,21 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "on|off", value_parser = parse::on_off,
           action = clap::ArgAction::Set)]
     large_step_mis: Option<bool>,
+    /// mmlt: how chains are spread over path depths, `joint` (pbrt's resampling over all
+    /// depths) or `per-depth` (a fixed count per depth, proportional to its bootstrap
+    /// estimate, splats scaled by b_d / n_d).
+    #[arg(long, value_name = "joint|per-depth", default_value = "joint", value_parser = parse::chain_allocation)]
+    chain_allocation: mcmc_core::render_loop::ChainAllocation,
+    /// mmlt: `on` stratifies the bootstrap over strategies (every primary point evaluated
+    /// under all strategies of its depth).
+    #[arg(long, value_name = "on|off", default_value = "off", value_parser = parse::on_off,
+          action = clap::ArgAction::Set)]
+    strategy_strata: bool,
+    /// mmlt: estimate each depth's normalisation from N all-strategy BDPT samples instead of
+    /// the bootstrap (0: the bootstrap's), 0..=100000000.
+    #[arg(long, value_name = "N", default_value_t = 0,
+          value_parser = clap::value_parser!(u64).range(0..=100_000_000))]
+    bdpt_normalization: u64,
     /// pssmlt, mmlt: raster (image-plane) mutation after LuxCore's: with probability P a small
     /// step moves only the two raster numbers, by 1 pixel to 10% of the image (Kelemen-style,
     /// log-uniform per axis); `on` is P = 0.25 [default: off].
@@ -273,6 +288,9 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             perturbation: args.perturbation,
             adapt: args.adapt,
             large_step_mis: args.large_step_mis,
+            mmlt_chain_allocation: args.chain_allocation,
+            mmlt_strategy_strata: args.strategy_strata,
+            mmlt_bdpt_normalization: args.bdpt_normalization,
             raster: pss::RasterParams::with_probability(args.raster_mutation),
         },
         strategy_images: args.strategy_images,

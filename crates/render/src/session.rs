@@ -56,6 +56,20 @@ pub struct McmcSettings {
     /// MMLT; docs/performance.md, "Equal-time efficiency (issue 17)"). Other integrators
     /// ignore it.
     pub large_step_mis: Option<bool>,
+    /// MMLT: how chains are spread over path depths (`--chain-allocation`;
+    /// [`crate::mlt::MltEstimator::chain_allocation`]). Default: joint resampling (pbrt's
+    /// scheme; docs/performance.md, "MMLT robustness (issue 17, item 3)"). Other integrators
+    /// ignore it.
+    pub mmlt_chain_allocation: mcmc_core::render_loop::ChainAllocation,
+    /// MMLT: stratify the bootstrap over strategies (`--strategy-strata`;
+    /// [`crate::mlt::MltEstimator::strategy_strata`]). Default off (docs/performance.md,
+    /// "MMLT robustness (issue 17, item 3)"). Other integrators ignore it.
+    pub mmlt_strategy_strata: bool,
+    /// MMLT: estimate each depth's integral `b_d` from this many all-strategy BDPT samples
+    /// (`--bdpt-normalization N`; [`crate::mlt::mmlt_depth_normalization`],
+    /// [`crate::mlt::render_mlt_normalized`]) instead of from the bootstrap; 0 (default): the
+    /// bootstrap's. Other integrators ignore it.
+    pub mmlt_bdpt_normalization: u64,
     /// PSSMLT and MMLT: raster (image-plane) mutation, LuxCore's image mutation read as a
     /// separate move ([`pss::RasterParams`], [`pss::RasterStep`]): with probability
     /// `raster.probability` a small step moves only the two raster numbers of the camera
@@ -77,6 +91,9 @@ impl Default for McmcSettings {
             perturbation: pathspace::PerturbationKind::Lens,
             adapt: crate::mlt::pathmlt::PathAdapt::Fixed,
             large_step_mis: None,
+            mmlt_chain_allocation: mcmc_core::render_loop::ChainAllocation::Joint,
+            mmlt_strategy_strata: false,
+            mmlt_bdpt_normalization: 0,
             raster: pss::RasterParams::off(),
         }
     }
@@ -494,7 +511,16 @@ fn render_bidirectional(
         let large_step_mis = m
             .large_step_mis
             .unwrap_or(large_step_mis_default(settings.integrator));
-        let estimator = mlt::MltEstimator { large_step_mis };
+        let mmlt = settings.integrator == IntegratorKind::Mmlt;
+        let estimator = mlt::MltEstimator {
+            large_step_mis,
+            chain_allocation: if mmlt {
+                m.mmlt_chain_allocation
+            } else {
+                mcmc_core::render_loop::ChainAllocation::Joint
+            },
+            strategy_strata: mmlt && m.mmlt_strategy_strata,
+        };
         if large_step_mis {
             notes.push(
                 "large-step MIS (Kelemen et al. 2002, section 4): large steps also weighted as independent samples"
@@ -507,7 +533,40 @@ fn render_bidirectional(
                 m.raster.min_pixels, m.raster.max_fraction
             ));
         }
-        if settings.integrator == IntegratorKind::Mmlt {
+        let normalization = if mmlt && m.mmlt_bdpt_normalization > 0 {
+            let t0 = Instant::now();
+            let nb = mlt::mmlt_depth_normalization(
+                scene,
+                params,
+                w,
+                h,
+                m.mmlt_bdpt_normalization,
+                settings.seed,
+                cancel,
+            );
+            if let Some(nb) = &nb {
+                notes.push(format!(
+                    "MMLT depth normalisation from {} all-strategy BDPT samples ({:.2} s): b = {:.6}",
+                    m.mmlt_bdpt_normalization,
+                    t0.elapsed().as_secs_f64(),
+                    nb.iter().sum::<f64>()
+                ));
+            }
+            nb.map(|nb| (nb, t0.elapsed()))
+        } else {
+            None
+        };
+        if let Some((nb, spent)) = normalization {
+            let targets = MmltTarget::all_depths(scene, params, w, h);
+            let mut budgeted = mlt_settings;
+            if let MltBudget::Time(t) = budgeted.budget {
+                budgeted.budget =
+                    MltBudget::Time(t.saturating_sub(spent).max(Duration::from_millis(1)));
+            }
+            mlt::render_mlt_normalized(
+                &targets, kernel, &budgeted, estimator, &nb, progress, cancel,
+            )
+        } else if settings.integrator == IntegratorKind::Mmlt {
             let targets = MmltTarget::all_depths(scene, params, w, h);
             mlt::render_mlt_with_estimator(
                 &targets,

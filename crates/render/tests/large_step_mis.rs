@@ -77,6 +77,7 @@ fn settings(scene: &Scene, seed: u64, mpp: f64, large_step: LargeStepMode) -> Ml
 
 const MIS: MltEstimator = MltEstimator {
     large_step_mis: true,
+    ..MltEstimator::plain()
 };
 
 fn render(method: Method, scene: &Scene, params: BdptParams, s: &MltSettings) -> MltOutput {

@@ -48,6 +48,51 @@ pub trait IndependentStates<S>: Sync {
         let _ = state;
         log_density.exp()
     }
+
+    /// Number of strata of target `target`'s bootstrap (default 1: plain independent
+    /// samples). With `n > 1` the loop draws that target's bootstrap samples in groups of `n`
+    /// that share one key: sample `i` is stratum `i % n` of group `i / n`
+    /// ([`IndependentStates::stratified`]), and only whole groups are counted (a trailing
+    /// partial group is skipped), so every stratum has the same number of samples.
+    ///
+    /// # Notes
+    /// MMLT (Hachisuka, Kaplanyan, Dachsbacher 2014, section 4) picks one strategy per sample
+    /// from a primary sample: stratifying that number makes every primary point of the
+    /// bootstrap be evaluated under every strategy of its depth, so `b_d` becomes a BDPT
+    /// all-strategy estimate of the depth (`render`'s `MmltStrata`).
+    fn strata(&self, target: usize) -> u64 {
+        let _ = target;
+        1
+    }
+
+    /// Writes stratum `stratum` (of `strata`) of the group drawn with `key` into `state`.
+    ///
+    /// Contract (what keeps the bootstrap unbiased): if the states of stratum `k` have density
+    /// `p_k`, their average `(1/n) sum_k p_k` must be the density that
+    /// [`IndependentStates::weight`] divides by. Then the mean weight over whole groups is an
+    /// unbiased estimate of `b` (stratified sampling with equal allocation), and resampling
+    /// in proportion to the weights picks chain starts exactly as from unstratified samples
+    /// of that density (a deterministic-mixture design). The default ignores the stratum
+    /// (`independent(key)`): correct, but every stratum of a group is then the same state.
+    fn stratified(&self, key: u64, stratum: u64, strata: u64, state: &mut S) {
+        let _ = (stratum, strata);
+        self.independent(key, state);
+    }
+}
+
+/// Writes bootstrap sample `index` of target `target` under `seed` into `state`: the same
+/// function for the bootstrap and for re-creating a chain's start.
+pub(crate) fn draw<S, Src>(source: &Src, seed: u64, target: usize, index: u64, state: &mut S)
+where
+    Src: IndependentStates<S> + ?Sized,
+{
+    let strata = source.strata(target).max(1);
+    if strata == 1 {
+        source.independent(bootstrap_key(seed, target, index), state);
+    } else {
+        let key = bootstrap_key(seed, target, index / strata);
+        source.stratified(key, index % strata, strata, state);
+    }
 }
 
 /// The key of bootstrap sample `index` of target `target` under master seed `seed`:
@@ -58,14 +103,53 @@ pub fn bootstrap_key(seed: u64, target: usize, index: u64) -> u64 {
     chain_seed(per_target, index)
 }
 
-/// Maximum number of chunk sums kept by the bootstrap (128 KiB of memory).
+/// Maximum number of chunk sums kept by the bootstrap (128 KiB of memory); with one set of
+/// chunk sums per target ([`ChainAllocation::PerTarget`]) each target keeps
+/// `MAX_CHUNKS / targets` of them (at least [`MIN_CHUNKS`]).
 const MAX_CHUNKS: usize = 1 << 14;
+
+/// Fewest chunk sums a target keeps under [`ChainAllocation::PerTarget`].
+const MIN_CHUNKS: usize = 16;
 
 /// Samples evaluated per parallel batch (rounded to whole rows of all targets).
 const BATCH: u64 = 8192;
 
+/// How a render loop spreads its chains over its targets (MMLT: over path depths).
+// The hidden variant is a test-only negative control, not a non-exhaustive marker.
+#[allow(clippy::manual_non_exhaustive)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ChainAllocation {
+    /// pbrt's scheme (the default): systematic resampling over the bootstrap samples of all
+    /// targets jointly. A target's chain count is random (its expectation is proportional to
+    /// `b_d`); every splat is scaled by `b / N`.
+    #[default]
+    Joint,
+    /// A fixed number of chains per target: `n_d` proportional to `b_d` by largest
+    /// remainders, at least one for every target with `b_d > 0` (when there are enough
+    /// chains); the chains of target `d` are resampled systematically from target `d`'s own
+    /// bootstrap samples; a chain of target `d` splats with the extra factor
+    /// `(b_d / n_d) / (b / C)` (`C` chains), so the image is
+    /// `sum_d (b_d / (n_d m)) sum_(chains of d) sum_steps splats` with `m` mutations per chain.
+    ///
+    /// Unbiased per target for any `n_d >= 1` fixed by the bootstrap: given the bootstrap,
+    /// systematic resampling picks sample `j` of target `d` `n_d w_j / W_d` times in
+    /// expectation (`W_d` the sum of target `d`'s weights), and an MH kernel leaves the
+    /// target invariant, so `E[(b_d / n_d) sum_chains g(X_t)] = E[(1/M) sum_j w_j (P^t g)(x_j)]
+    /// = integral f_d P^t g = integral f_d g` (the SIR-start argument of pbrt and of
+    /// Hachisuka et al. 2014, section 4, applied to each depth separately instead of to all
+    /// depths jointly). The joint scheme's random split of the chains over depths is gone;
+    /// scaling by `b / N` instead of `b_d / n_d` would be biased (it weights depth `d` by
+    /// `n_d / C` instead of `b_d / b`; the tests' negative control).
+    PerTarget,
+    /// Negative control for tests (feature `testing`): [`ChainAllocation::PerTarget`]'s
+    /// chains with every splat scaled by `b / N` only. Biased.
+    #[cfg(feature = "testing")]
+    #[doc(hidden)]
+    PerTargetWithJointScale,
+}
+
 /// Sums of a stream of weights over chunks of `chunk` consecutive samples; when the chunk
-/// count reaches [`MAX_CHUNKS`], neighbouring chunks are merged and the chunk size doubles, so
+/// count reaches `max`, neighbouring chunks are merged and the chunk size doubles, so
 /// memory stays bounded whatever the number of samples.
 #[derive(Clone, Debug)]
 struct ChunkSums {
@@ -73,15 +157,17 @@ struct ChunkSums {
     sums: Vec<f64>,
     open: f64,
     in_open: u64,
+    max: usize,
 }
 
 impl ChunkSums {
-    fn new() -> Self {
+    fn new(max: usize) -> Self {
         Self {
             chunk: 1,
             sums: Vec::new(),
             open: 0.0,
             in_open: 0,
+            max: max.max(2) & !1,
         }
     }
 
@@ -92,11 +178,11 @@ impl ChunkSums {
             self.sums.push(self.open);
             self.open = 0.0;
             self.in_open = 0;
-            if self.sums.len() == MAX_CHUNKS {
-                for j in 0..MAX_CHUNKS / 2 {
+            if self.sums.len() == self.max {
+                for j in 0..self.max / 2 {
                     self.sums[j] = self.sums[2 * j] + self.sums[2 * j + 1];
                 }
-                self.sums.truncate(MAX_CHUNKS / 2);
+                self.sums.truncate(self.max / 2);
                 self.chunk *= 2;
             }
         }
@@ -118,13 +204,16 @@ pub(crate) struct BootstrapOutcome {
     pub b: f64,
     /// Estimate of each target's integral `b_d` (its mean weight; they sum to `b`).
     pub target_b: Vec<f64>,
-    /// Standard error of `b` (from the per-row sums, rows being independent).
+    /// Standard error of `b` (from the per-row sums, rows being independent; approximate
+    /// with strata, whose groups span several rows).
     pub standard_error: f64,
     /// Samples evaluated (over all targets).
     pub evaluated: u64,
     /// Chain starts: (target index, sample index), one per requested chain; empty if no
     /// sample had positive weight.
     pub starts: Vec<(usize, u64)>,
+    /// Chains per target (the counts of `starts`).
+    pub target_chains: Vec<usize>,
     /// True if the time share of the budget ran out before all samples were evaluated.
     pub stopped_early: bool,
     /// True if cancelled.
@@ -136,15 +225,22 @@ pub(crate) struct BootstrapPlan<'a> {
     pub per_target: u64,
     pub chains: usize,
     pub seed: u64,
+    pub allocation: ChainAllocation,
+    /// Per-target integrals to allocate chains by instead of the bootstrap's (targets whose
+    /// bootstrap found nothing get none).
+    pub allocation_b: Option<&'a [f64]>,
     pub deadline: Option<Instant>,
     pub progress: &'a dyn Progress,
     pub cancel: &'a AtomicBool,
 }
 
+/// The weight of stream sample `sample` (target `sample % D`, index `sample / D`); 0 for
+/// indices at or beyond the target's `limits` entry (a partial group of strata).
 fn weight_of<T, Src>(
     targets: &[T],
     source: &Src,
     seed: u64,
+    limits: &[u64],
     sample: u64,
     state: &mut T::State,
     payload: &mut T::Payload,
@@ -155,7 +251,10 @@ where
 {
     let d = targets.len() as u64;
     let (target, index) = ((sample % d) as usize, sample / d);
-    source.independent(bootstrap_key(seed, target, index), state);
+    if index >= limits[target] {
+        return 0.0;
+    }
+    draw(source, seed, target, index, state);
     let log_density = targets[target].evaluate(state, payload);
     if log_density == f64::NEG_INFINITY || log_density.is_nan() {
         return 0.0;
@@ -168,10 +267,71 @@ where
     }
 }
 
+/// Chains per target: proportional to `target_b` by largest remainders, at least one per
+/// target with positive `b_d` if `chains` allows (ties go to the lower index).
+pub(crate) fn allocate(target_b: &[f64], chains: usize) -> Vec<usize> {
+    let positive = |b: f64| b.is_finite() && b > 0.0;
+    let total: f64 = target_b.iter().copied().filter(|&b| positive(b)).sum();
+    let quota: Vec<f64> = target_b
+        .iter()
+        .map(|&b| {
+            if positive(b) && total > 0.0 {
+                chains as f64 * b / total
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut n: Vec<usize> = quota.iter().map(|q| q.floor() as usize).collect();
+    let n_positive = target_b.iter().filter(|&&b| positive(b)).count();
+    if n_positive == 0 {
+        return n;
+    }
+    if n_positive <= chains {
+        for (k, &b) in n.iter_mut().zip(target_b) {
+            if positive(b) && *k == 0 {
+                *k = 1;
+            }
+        }
+    }
+    let mut assigned: usize = n.iter().sum();
+    while assigned < chains {
+        let best = (0..n.len())
+            .filter(|&t| positive(target_b[t]))
+            .max_by(|&a, &c| {
+                (quota[a] - n[a] as f64)
+                    .total_cmp(&(quota[c] - n[c] as f64))
+                    .then(c.cmp(&a))
+            })
+            .unwrap_or_else(|| unreachable!("n_positive > 0"));
+        n[best] += 1;
+        assigned += 1;
+    }
+    while assigned > chains {
+        let Some(best) = (0..n.len())
+            .filter(|&t| n[t] > 1 || (n_positive > chains && n[t] > 0))
+            .max_by(|&a, &c| {
+                (n[a] as f64 - quota[a])
+                    .total_cmp(&(n[c] as f64 - quota[c]))
+                    .then(c.cmp(&a))
+            })
+        else {
+            break;
+        };
+        n[best] -= 1;
+        assigned -= 1;
+    }
+    n
+}
+
 /// Runs the bootstrap: `per_target` independent samples of every target, sample `i` of target
 /// `d` being number `i * D + d` of one stream, evaluated in parallel batches and reduced in
 /// stream order (bit-identical for any thread count), then systematic resampling (Veach's
-/// thesis, p. 340; Kitagawa 1996) of `chains` starts in proportion to the weights.
+/// thesis, p. 340; Kitagawa 1996) of `chains` starts in proportion to the weights: over all
+/// targets jointly, or per target ([`ChainAllocation`]).
+///
+/// Targets with strata ([`IndependentStates::strata`]) count whole groups only: their
+/// `b_d` is the mean over the first `floor(rows / n) n` samples.
 ///
 /// Memory: one batch of weights plus at most [`MAX_CHUNKS`] chunk sums. Resampling finds the
 /// chunk of each start from the chunk sums and re-evaluates only those chunks (at most
@@ -182,10 +342,19 @@ where
     Src: IndependentStates<T::State> + ?Sized,
 {
     let d = targets.len().max(1) as u64;
+    let strata: Vec<u64> = (0..d as usize).map(|t| source.strata(t).max(1)).collect();
+    let stratified = strata.iter().any(|&s| s > 1);
+    let mut limits: Vec<u64> = strata.iter().map(|&s| plan.per_target / s * s).collect();
+    let per_target = plan.allocation != ChainAllocation::Joint;
     let total = plan.per_target.saturating_mul(d);
     let batch = (BATCH / d).max(1) * d;
     let mut weights = vec![0.0; batch.min(total) as usize];
-    let mut sums = ChunkSums::new();
+    let mut sums: Vec<ChunkSums> = if per_target {
+        let max = (MAX_CHUNKS / d as usize).max(MIN_CHUNKS);
+        (0..d).map(|_| ChunkSums::new(max)).collect()
+    } else {
+        vec![ChunkSums::new(MAX_CHUNKS)]
+    };
     let (mut sum, mut sum_sq_rows, mut evaluated) = (0.0f64, 0.0f64, 0u64);
     let mut target_sums = vec![0.0f64; d as usize];
     let (mut stopped_early, mut cancelled) = (false, false);
@@ -204,15 +373,23 @@ where
         weights[..len].par_iter_mut().enumerate().for_each_init(
             init,
             |(state, payload), (k, w)| {
-                *w = weight_of(targets, source, plan.seed, first + k as u64, state, payload);
+                *w = weight_of(
+                    targets,
+                    source,
+                    plan.seed,
+                    &limits,
+                    first + k as u64,
+                    state,
+                    payload,
+                );
             },
         );
         for row in weights[..len].chunks(d as usize) {
             let mut r = 0.0;
-            for (&w, t) in row.iter().zip(target_sums.iter_mut()) {
-                sums.push(w);
+            for (t, (&w, s)) in row.iter().zip(target_sums.iter_mut()).enumerate() {
+                sums[if per_target { t } else { 0 }].push(w);
                 r += w;
-                *t += w;
+                *s += w;
             }
             sum += r;
             sum_sq_rows += r * r;
@@ -220,116 +397,254 @@ where
         evaluated += len as u64;
         plan.progress.advance(len as u64);
     }
-    let rows = (evaluated / d) as f64;
-    let b = if rows > 0.0 { sum / rows } else { 0.0 };
+    let rows_count = evaluated / d;
+    let rows = rows_count as f64;
+    let mut finished: Vec<(u64, Vec<f64>)> = sums.into_iter().map(ChunkSums::finish).collect();
+    if stratified && rows_count < plan.per_target && !cancelled {
+        // Stopped early inside a group: drop the samples of its partial group from the sums
+        // (they were counted while streaming) and re-sum the chunks that held them.
+        let mut state = source.empty();
+        let mut payload = T::Payload::default();
+        let old = limits.clone();
+        for t in 0..d as usize {
+            limits[t] = rows_count / strata[t] * strata[t];
+        }
+        let mut touched: Vec<(usize, u64)> = Vec::new();
+        for t in 0..d as usize {
+            for i in limits[t]..old[t].min(rows_count) {
+                let sample = i * d + t as u64;
+                let w = weight_of(
+                    targets,
+                    source,
+                    plan.seed,
+                    &old,
+                    sample,
+                    &mut state,
+                    &mut payload,
+                );
+                target_sums[t] -= w;
+                sum -= w;
+                let (g, pos) = if per_target { (t, i) } else { (0, sample) };
+                touched.push((g, pos / finished[g].0));
+            }
+        }
+        touched.dedup();
+        for (g, j) in touched {
+            let (chunk, count) = (
+                finished[g].0,
+                if per_target { rows_count } else { evaluated },
+            );
+            let mut acc = 0.0;
+            for pos in j * chunk..((j + 1) * chunk).min(count) {
+                let sample = if per_target { pos * d + g as u64 } else { pos };
+                acc += weight_of(
+                    targets,
+                    source,
+                    plan.seed,
+                    &limits,
+                    sample,
+                    &mut state,
+                    &mut payload,
+                );
+            }
+            finished[g].1[j as usize] = acc;
+        }
+    }
+    let (b, target_b): (f64, Vec<f64>) = if stratified {
+        let tb: Vec<f64> = target_sums
+            .iter()
+            .zip(&limits)
+            .map(|(&s, &l)| {
+                let l = l.min(rows_count);
+                if l > 0 {
+                    s / l as f64
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        (tb.iter().sum(), tb)
+    } else {
+        (
+            if rows > 0.0 { sum / rows } else { 0.0 },
+            target_sums
+                .iter()
+                .map(|&s| if rows > 0.0 { s / rows } else { 0.0 })
+                .collect(),
+        )
+    };
     let standard_error = if rows > 1.0 {
-        ((sum_sq_rows / rows - b * b).max(0.0) / (rows - 1.0)).sqrt()
+        let mean_row = sum / rows;
+        ((sum_sq_rows / rows - mean_row * mean_row).max(0.0) / (rows - 1.0)).sqrt()
     } else {
         f64::INFINITY
     };
-    let target_b = target_sums
-        .iter()
-        .map(|&s| if rows > 0.0 { s / rows } else { 0.0 })
-        .collect();
     let mut outcome = BootstrapOutcome {
         b,
         target_b,
         standard_error,
         evaluated,
         starts: Vec::new(),
+        target_chains: vec![0; d as usize],
         stopped_early,
         cancelled,
     };
     if cancelled || sum.is_nan() || sum <= 0.0 || plan.chains == 0 {
         return outcome;
     }
-    let (chunk, chunk_sums) = sums.finish();
-    let u = (mix64(plan.seed ^ 0x5e1f_c4a1) >> 11) as f64 / (1u64 << 53) as f64;
-    match resample(targets, source, plan, chunk, &chunk_sums, evaluated, u) {
-        Some(starts) => outcome.starts = starts,
-        None => outcome.cancelled = true,
+    let ctx = Resampling {
+        targets,
+        source,
+        plan,
+        limits: &limits,
+    };
+    if per_target {
+        let by: Vec<f64> = match plan.allocation_b {
+            Some(given) => given
+                .iter()
+                .zip(&outcome.target_b)
+                .map(|(&g, &own)| if own > 0.0 { g } else { 0.0 })
+                .collect(),
+            None => outcome.target_b.clone(),
+        };
+        let counts = allocate(&by, plan.chains);
+        // (position key in [0, 1), target, index): chains of all targets interleaved by
+        // their systematic position, so that every job gets a mix of depths.
+        let mut keyed: Vec<(f64, usize, u64)> = Vec::with_capacity(plan.chains);
+        for (t, &n) in counts.iter().enumerate() {
+            if n == 0 {
+                continue;
+            }
+            let (chunk, chunk_sums) = &finished[t];
+            let u = unit(mix64(plan.seed ^ 0x5e1f_c4a1 ^ mix64(t as u64 ^ 0x9e37)));
+            let picked = ctx.resample(*chunk, chunk_sums, rows_count, n, u, |p| p * d + t as u64);
+            let Some(picked) = picked else {
+                outcome.cancelled = true;
+                return outcome;
+            };
+            for (c, sample) in picked.into_iter().enumerate() {
+                keyed.push(((c as f64 + u) / n as f64, t, sample / d));
+            }
+        }
+        keyed.sort_by(|a, c| a.0.total_cmp(&c.0).then(a.1.cmp(&c.1)));
+        outcome.starts = keyed.into_iter().map(|(_, t, i)| (t, i)).collect();
+    } else {
+        let (chunk, chunk_sums) = &finished[0];
+        let u = unit(mix64(plan.seed ^ 0x5e1f_c4a1));
+        match ctx.resample(*chunk, chunk_sums, evaluated, plan.chains, u, |p| p) {
+            Some(picked) => {
+                outcome.starts = picked
+                    .into_iter()
+                    .map(|s| ((s % d) as usize, s / d))
+                    .collect();
+            }
+            None => outcome.cancelled = true,
+        }
+    }
+    for &(t, _) in &outcome.starts {
+        outcome.target_chains[t] += 1;
     }
     outcome
 }
 
-/// Systematic resampling over the chunk sums, then within the chosen chunks by re-evaluating
-/// them. Returns `None` if cancelled.
-fn resample<T, Src>(
-    targets: &[T],
-    source: &Src,
-    plan: &BootstrapPlan<'_>,
-    chunk: u64,
-    chunk_sums: &[f64],
-    evaluated: u64,
-    u: f64,
-) -> Option<Vec<(usize, u64)>>
+/// A uniform number in [0, 1) from 64 random bits.
+fn unit(bits: u64) -> f64 {
+    (bits >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// What resampling needs to re-evaluate samples.
+struct Resampling<'a, 'p, T, Src: ?Sized> {
+    targets: &'a [T],
+    source: &'a Src,
+    plan: &'a BootstrapPlan<'p>,
+    limits: &'a [u64],
+}
+
+impl<T, Src> Resampling<'_, '_, T, Src>
 where
     T: Target,
     Src: IndependentStates<T::State> + ?Sized,
 {
-    let d = targets.len() as u64;
-    let total: f64 = chunk_sums.iter().sum();
-    let step = total / plan.chains as f64;
-    // (chunk index, offset of the position inside the chunk) per chain, in chain order.
-    let mut located = Vec::with_capacity(plan.chains);
-    let (mut j, mut cumulative) = (0usize, 0.0f64);
-    for c in 0..plan.chains {
-        let position = (c as f64 + u.clamp(0.0, 1.0 - f64::EPSILON)) * step;
-        while j + 1 < chunk_sums.len() && cumulative + chunk_sums[j] <= position {
-            cumulative += chunk_sums[j];
-            j += 1;
+    /// Systematic resampling of `chains` positions over the chunk sums of a sequence of
+    /// `count` positions (position `p` is stream sample `to_sample(p)`), then within the
+    /// chosen chunks by re-evaluating them. Returns the chosen stream samples in position
+    /// order, or `None` if cancelled.
+    fn resample(
+        &self,
+        chunk: u64,
+        chunk_sums: &[f64],
+        count: u64,
+        chains: usize,
+        u: f64,
+        to_sample: impl Fn(u64) -> u64 + Sync,
+    ) -> Option<Vec<u64>> {
+        let (targets, source, plan) = (self.targets, self.source, self.plan);
+        let total: f64 = chunk_sums.iter().sum();
+        let step = total / chains as f64;
+        // (chunk index, offset of the position inside the chunk) per chain, in chain order.
+        let mut located = Vec::with_capacity(chains);
+        let (mut j, mut cumulative) = (0usize, 0.0f64);
+        for c in 0..chains {
+            let position = (c as f64 + u.clamp(0.0, 1.0 - f64::EPSILON)) * step;
+            while j + 1 < chunk_sums.len() && cumulative + chunk_sums[j] <= position {
+                cumulative += chunk_sums[j];
+                j += 1;
+            }
+            let (mut jj, mut offset) = (j, position - cumulative);
+            // Rounding at the very end can land in an empty chunk: use the last non-empty one.
+            while chunk_sums[jj] == 0.0 && jj > 0 {
+                jj -= 1;
+                offset = f64::INFINITY;
+            }
+            located.push((jj, offset));
         }
-        let (mut jj, mut offset) = (j, position - cumulative);
-        // Rounding at the very end can land in an empty chunk: use the last non-empty one.
-        while chunk_sums[jj] == 0.0 && jj > 0 {
-            jj -= 1;
-            offset = f64::INFINITY;
-        }
-        located.push((jj, offset));
-    }
-    // Re-evaluate each chosen chunk once (in parallel) and pick the samples inside it.
-    let mut chosen: Vec<usize> = located.iter().map(|l| l.0).collect();
-    chosen.dedup();
-    let picks: Vec<Option<Vec<(f64, u64)>>> = chosen
-        .par_iter()
-        .map_init(
-            || (source.empty(), T::Payload::default()),
-            |(state, payload), &j| {
-                if plan.cancel.load(Ordering::Relaxed) {
-                    return None;
-                }
-                let lo = j as u64 * chunk;
-                let hi = (lo + chunk).min(evaluated);
-                let mut prefix = Vec::with_capacity((hi - lo) as usize);
-                let mut acc = 0.0;
-                for s in lo..hi {
-                    let w = weight_of(targets, source, plan.seed, s, state, payload);
-                    if w > 0.0 {
-                        acc += w;
-                        prefix.push((acc, s));
+        // Re-evaluate each chosen chunk once (in parallel) and pick the samples inside it.
+        let mut chosen: Vec<usize> = located.iter().map(|l| l.0).collect();
+        chosen.dedup();
+        let picks: Vec<Option<Vec<(f64, u64)>>> = chosen
+            .par_iter()
+            .map_init(
+                || (source.empty(), T::Payload::default()),
+                |(state, payload), &j| {
+                    if plan.cancel.load(Ordering::Relaxed) {
+                        return None;
                     }
-                }
-                Some(prefix)
-            },
-        )
-        .collect();
-    let mut starts = Vec::with_capacity(plan.chains);
-    let mut k = 0;
-    for (j, offset) in located {
-        while chosen[k] != j {
-            k += 1;
+                    let lo = j as u64 * chunk;
+                    let hi = (lo + chunk).min(count);
+                    let mut prefix = Vec::with_capacity((hi - lo) as usize);
+                    let mut acc = 0.0;
+                    for p in lo..hi {
+                        let s = to_sample(p);
+                        let w =
+                            weight_of(targets, source, plan.seed, self.limits, s, state, payload);
+                        if w > 0.0 {
+                            acc += w;
+                            prefix.push((acc, s));
+                        }
+                    }
+                    Some(prefix)
+                },
+            )
+            .collect();
+        let mut starts = Vec::with_capacity(chains);
+        let mut k = 0;
+        for (j, offset) in located {
+            while chosen[k] != j {
+                k += 1;
+            }
+            let prefix = picks[k].as_ref()?;
+            // The first sample whose cumulative weight exceeds the offset; rounding differences
+            // between the chunk sum and the re-summed weights fall back to the chunk's last
+            // sample.
+            let i = prefix.partition_point(|&(acc, _)| acc <= offset);
+            let sample = prefix
+                .get(i)
+                .or(prefix.last())
+                .map_or_else(|| to_sample(j as u64 * chunk), |p| p.1);
+            starts.push(sample);
         }
-        let prefix = picks[k].as_ref()?;
-        // The first sample whose cumulative weight exceeds the offset; rounding differences
-        // between the chunk sum and the re-summed weights fall back to the chunk's last sample.
-        let i = prefix.partition_point(|&(acc, _)| acc <= offset);
-        let sample = prefix
-            .get(i)
-            .or(prefix.last())
-            .map_or(j as u64 * chunk, |p| p.1);
-        starts.push(((sample % d) as usize, sample / d));
+        Some(starts)
     }
-    Some(starts)
 }
 
 #[cfg(test)]
@@ -352,10 +667,12 @@ mod tests {
         type State = Vec<f64>;
         type Payload = ();
         fn evaluate(&self, x: &mut Vec<f64>, _: &mut ()) -> f64 {
-            // Find the index whose key this is (small tables only).
-            let i = (0..self.0.len() as u64)
-                .find(|&i| bootstrap_key(1, 0, i) as f64 == x[0])
-                .unwrap();
+            // Find the index whose key this is (small tables, two targets at most).
+            let i = (0..2)
+                .flat_map(|t| (0..self.0.len() as u64).map(move |i| (t, i)))
+                .find(|&(t, i)| bootstrap_key(1, t, i) as f64 == x[0])
+                .unwrap()
+                .1;
             self.0[i as usize].ln()
         }
     }
@@ -365,6 +682,8 @@ mod tests {
             per_target,
             chains,
             seed: 1,
+            allocation: ChainAllocation::Joint,
+            allocation_b: None,
             deadline: None,
             progress: &NoProgress,
             cancel,
@@ -384,7 +703,7 @@ mod tests {
 
     #[test]
     fn chunk_sums_stay_bounded_and_exact() {
-        let mut c = ChunkSums::new();
+        let mut c = ChunkSums::new(MAX_CHUNKS);
         let n = 3 * MAX_CHUNKS as u64 + 5;
         for i in 0..n {
             c.push(i as f64);
@@ -395,6 +714,49 @@ mod tests {
         let expected: f64 = (0..chunk).map(|i| i as f64).sum();
         assert_eq!(sums[0], expected);
         assert_eq!(sums.iter().sum::<f64>(), (n * (n - 1) / 2) as f64);
+    }
+
+    #[test]
+    fn allocation_is_proportional_with_one_chain_per_positive_target() {
+        assert_eq!(allocate(&[0.5, 0.3, 0.2], 10), [5, 3, 2]);
+        // Largest remainders: quotas 6.67, 3.33 -> 7, 3.
+        assert_eq!(allocate(&[2.0, 1.0], 10), [7, 3]);
+        // At least one chain for a target with light, taken from the largest.
+        assert_eq!(allocate(&[1.0, 0.001, 0.0], 10), [9, 1, 0]);
+        assert_eq!(allocate(&[1.0, 1e-9, 1e-9, 1e-9], 4), [1, 1, 1, 1]);
+        // More targets with light than chains: proportional, no minimum.
+        assert_eq!(allocate(&[3.0, 2.0, 1.0], 2), [1, 1, 0]);
+        assert_eq!(allocate(&[0.0, 0.0], 5), [0, 0]);
+        assert_eq!(allocate(&[f64::NAN, 1.0], 3), [0, 3]);
+        for chains in 1..40 {
+            let n = allocate(&[0.7, 0.01, 0.2, 0.0, 0.09], chains);
+            assert_eq!(n.iter().sum::<usize>(), chains, "{chains}: {n:?}");
+        }
+    }
+
+    #[test]
+    fn per_target_resampling_stays_within_each_target() {
+        let no = AtomicBool::new(false);
+        // Two targets of a table each (the test target ignores its index): the weights of
+        // target 0 and target 1 are the same table, so each gets half the chains.
+        let t = [
+            Table(vec![0.0, 1.0, 3.0, 0.0]),
+            Table(vec![0.0, 1.0, 3.0, 0.0]),
+        ];
+        let mut p = plan(8, 4, &no);
+        p.allocation = ChainAllocation::PerTarget;
+        let out = run(&t, &Indexed, &p);
+        assert_eq!(out.target_chains, [4, 4]);
+        for target in 0..2 {
+            let picked: Vec<u64> = out
+                .starts
+                .iter()
+                .filter(|s| s.0 == target)
+                .map(|s| s.1)
+                .collect();
+            assert_eq!(picked.iter().filter(|&&i| i == 1).count(), 1, "{picked:?}");
+            assert_eq!(picked.iter().filter(|&&i| i == 2).count(), 3, "{picked:?}");
+        }
     }
 
     #[test]

@@ -21,6 +21,8 @@ const POLL_EVERY: u64 = 64;
 /// One work unit: its chains (each with its remaining mutations) and its own sink.
 pub(crate) struct Job<'t, T: Target, K, C, Sk> {
     pub(crate) chains: Vec<(Chain<'t, T, K, C, ChainRng>, u64)>,
+    /// Per chain: the extra factor of its splats ([`super::ChainAllocation`]).
+    pub(crate) weights: Vec<f64>,
     pub(crate) sink: Sk,
     pub(crate) dropped: u64,
     pub(crate) non_finite: u64,
@@ -30,6 +32,7 @@ impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
     pub(crate) fn new(sink: Sk) -> Self {
         Self {
             chains: Vec::new(),
+            weights: Vec::new(),
             sink,
             dropped: 0,
             non_finite: 0,
@@ -69,12 +72,14 @@ where
         jobs.par_iter_mut().for_each(|job| {
             let Job {
                 chains,
+                weights,
                 sink,
                 dropped,
                 non_finite,
             } = job;
             let mut observer = SplatObserver::new(sink);
-            'chains: for (chain, remaining) in chains.iter_mut() {
+            'chains: for ((chain, remaining), &weight) in chains.iter_mut().zip(weights.iter()) {
+                observer.set_weight(weight);
                 let mut left = round.min(*remaining);
                 while left > 0 {
                     if stop() {

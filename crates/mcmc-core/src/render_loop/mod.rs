@@ -11,7 +11,9 @@
 //!    see [`bootstrap_key`]).
 //! 2. **Chain starts** by systematic resampling in proportion to the weights, so chains start
 //!    in the stationary distribution (no start-up bias, no burn-in). A chain keeps the target
-//!    of its start (MMLT: one target per path depth).
+//!    of its start (MMLT: one target per path depth). Over all targets jointly (pbrt), or
+//!    with a fixed number of chains per target ([`ChainAllocation`]); a target's bootstrap
+//!    may be stratified ([`IndependentStates::strata`]).
 //! 3. **Chains in fixed jobs**, each job with its own sink, merged in job order; per-chain RNGs
 //!    seeded from (seed, chain index): under a mutation budget the image is bit-identical for
 //!    any thread count.
@@ -31,7 +33,7 @@ mod large_step_mis;
 mod shared;
 mod splat;
 
-pub use bootstrap::{bootstrap_key, IndependentStates};
+pub use bootstrap::{bootstrap_key, ChainAllocation, IndependentStates};
 #[cfg(feature = "testing")]
 pub(crate) use large_step_mis::mis_step;
 pub use large_step_mis::LargeStepMis;
@@ -91,6 +93,10 @@ pub struct LoopSettings {
     /// factory in [`ChainSlot`]; it takes effect for kernels made with
     /// [`LargeStepMis::for_slot`] (others ignore it).
     pub large_step_mis: bool,
+    /// How the chains are spread over the targets (default [`ChainAllocation::Joint`],
+    /// pbrt's scheme; [`ChainAllocation::PerTarget`]: a fixed count per target, each target's
+    /// splats scaled by `b_d / n_d`).
+    pub chain_allocation: ChainAllocation,
 }
 
 impl Default for LoopSettings {
@@ -104,6 +110,7 @@ impl Default for LoopSettings {
             jobs: 32,
             bootstrap_time_share: 0.25,
             large_step_mis: false,
+            chain_allocation: ChainAllocation::Joint,
         }
     }
 }
@@ -196,6 +203,9 @@ pub struct LoopOutput<K, Sh> {
     pub b_standard_error: f64,
     /// The bootstrap estimate `b_d` of each target's integral (they sum to `b`).
     pub target_b: Vec<f64>,
+    /// Chains started per target (their starts; chains whose start failed to re-evaluate
+    /// are included).
+    pub target_chains: Vec<usize>,
     /// Bootstrap samples evaluated (over all targets).
     pub bootstrap_samples: u64,
     /// Chains that ran.
@@ -313,6 +323,58 @@ where
         progress: &dyn Progress,
         cancel: &AtomicBool,
     ) -> Result<LoopOutput<Sk, C::Shared>, McmcError> {
+        self.run_inner(settings, None, progress, cancel)
+    }
+
+    /// As [`RenderLoop::run`], with each target's integral `b_d` given by the caller
+    /// (`normalization[d]`, e.g. a cheaper or lower-variance independent estimate: MMLT's
+    /// depths from all-strategy BDPT samples) instead of the bootstrap's: the chains are
+    /// allocated per target ([`ChainAllocation::PerTarget`], whatever
+    /// `settings.chain_allocation` says) in proportion to `normalization`, each target's
+    /// splats scaled by `normalization[d] / n_d`; the bootstrap only picks the starts (a
+    /// target whose bootstrap found nothing gets no chain, with a note). `LoopOutput::b` and
+    /// `target_b` report `normalization`.
+    ///
+    /// # Notes
+    /// Consistent, not exactly unbiased for finite runs: with `b_d` independent of the
+    /// chains, `E[image] = sum_d b_d E[H_d]`, where `H_d`, the chains' normalised splat
+    /// histogram, carries the start bias of importance resampling (`O(1 / bootstrap
+    /// samples)`, decaying with the chain length). [`RenderLoop::run`] is exact because its
+    /// `b_d` and its starts come from the same samples (Hachisuka et al. 2014, section 4).
+    ///
+    /// # Errors
+    /// As [`RenderLoop::run`]; also [`McmcError::InvalidParameter`] if `normalization` has
+    /// not one finite non-negative value per target.
+    pub fn run_normalized(
+        &self,
+        settings: &LoopSettings,
+        normalization: &[f64],
+        progress: &dyn Progress,
+        cancel: &AtomicBool,
+    ) -> Result<LoopOutput<Sk, C::Shared>, McmcError> {
+        if normalization.len() != self.targets.len()
+            || !normalization.iter().all(|b| b.is_finite() && *b >= 0.0)
+        {
+            return Err(McmcError::InvalidParameter {
+                name: "normalization",
+                value: normalization.len() as f64,
+                allowed: "one finite non-negative value per target",
+            });
+        }
+        let settings = LoopSettings {
+            chain_allocation: ChainAllocation::PerTarget,
+            ..*settings
+        };
+        self.run_inner(&settings, Some(normalization), progress, cancel)
+    }
+
+    fn run_inner(
+        &self,
+        settings: &LoopSettings,
+        normalization: Option<&[f64]>,
+        progress: &dyn Progress,
+        cancel: &AtomicBool,
+    ) -> Result<LoopOutput<Sk, C::Shared>, McmcError> {
         settings.validate()?;
         if self.targets.is_empty() {
             return Err(McmcError::InvalidParameter {
@@ -353,6 +415,8 @@ where
                 per_target: settings.bootstrap_samples,
                 chains,
                 seed: settings.seed,
+                allocation: settings.chain_allocation,
+                allocation_b: normalization,
                 deadline: bootstrap_deadline,
                 progress,
                 cancel,
@@ -366,12 +430,24 @@ where
                 settings.bootstrap_time_share * 100.0
             ));
         }
+        let mut boot = boot;
+        let mut normalization_note = None;
+        if let Some(nb) = normalization {
+            normalization_note = Some(format!(
+                "normalisation given per target (sum {:.6}); the bootstrap's estimate was {:.6}",
+                nb.iter().sum::<f64>(),
+                boot.b
+            ));
+            boot.target_b = nb.to_vec();
+            boot.b = nb.iter().sum();
+        }
         let mut out = LoopOutput {
             sink: (self.sink)(),
             splat_scale: 0.0,
             b: boot.b,
             b_standard_error: boot.standard_error,
             target_b: boot.target_b.clone(),
+            target_chains: boot.target_chains.clone(),
             bootstrap_samples: boot.evaluated,
             chains: 0,
             mutations: 0,
@@ -383,6 +459,7 @@ where
             found_nothing: false,
             notes,
         };
+        out.notes.extend(normalization_note);
         if boot.cancelled {
             out.notes.push("cancelled during the bootstrap".to_owned());
             return Ok(out);
@@ -405,6 +482,39 @@ where
                 LoopBudget::Time(_) => u64::MAX,
             }
         };
+        // The extra splat factor of a chain of each target: 1 for the joint allocation, whose
+        // image is `b / N` times the splat sums; `(b_d / n_d) / (b / C)` per target
+        // (ChainAllocation::PerTarget), so that the same `b / N` makes it `b_d / (n_d m)`.
+        let target_weight: Vec<f64> = match settings.chain_allocation {
+            ChainAllocation::Joint => vec![1.0; self.targets.len()],
+            #[cfg(feature = "testing")]
+            ChainAllocation::PerTargetWithJointScale => vec![1.0; self.targets.len()],
+            ChainAllocation::PerTarget => {
+                let per_chain_b = boot.b / boot.starts.len() as f64;
+                boot.target_b
+                    .iter()
+                    .zip(&boot.target_chains)
+                    .map(|(&b_d, &n_d)| {
+                        if n_d == 0 {
+                            0.0
+                        } else {
+                            b_d / n_d as f64 / per_chain_b
+                        }
+                    })
+                    .collect()
+            }
+        };
+        if settings.chain_allocation != ChainAllocation::Joint {
+            let missed = (0..self.targets.len())
+                .filter(|&t| boot.target_b[t] > 0.0 && boot.target_chains[t] == 0)
+                .count();
+            if missed > 0 {
+                out.notes.push(format!(
+                    "{missed} target(s) with light found by the bootstrap got no chain ({} chains for more targets): their light is missing from the image",
+                    boot.starts.len()
+                ));
+            }
+        }
         let n_jobs = settings.jobs.min(chains);
         let mut skipped = 0usize;
         let mut job_list: Vec<jobs::Job<'_, T, K, C, Sk>> = (0..n_jobs)
@@ -420,8 +530,7 @@ where
                         large_step_mis: settings.large_step_mis,
                     };
                     let mut state = self.states.empty();
-                    self.states
-                        .independent(bootstrap_key(settings.seed, target, index), &mut state);
+                    bootstrap::draw(self.states, settings.seed, target, index, &mut state);
                     let rng = ChainRng::seed_from_u64(chain_seed(settings.seed, c as u64));
                     match Chain::new(
                         &self.targets[target],
@@ -430,7 +539,10 @@ where
                         rng,
                         state,
                     ) {
-                        Ok(chain) => job.chains.push((chain, per_chain(c))),
+                        Ok(chain) => {
+                            job.chains.push((chain, per_chain(c)));
+                            job.weights.push(target_weight[target]);
+                        }
                         Err(_) => skipped += 1,
                     }
                 }

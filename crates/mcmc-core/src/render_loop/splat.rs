@@ -174,12 +174,24 @@ pub struct SplatObserver<'a, K> {
     pub sink: &'a mut K,
     /// Splats the sink dropped (non-finite or outside the image).
     pub dropped: u64,
+    /// Extra factor of every splat (1 unless set: the per-target chain weight of
+    /// [`super::ChainAllocation::PerTarget`]).
+    weight: f64,
 }
 
 impl<'a, K> SplatObserver<'a, K> {
     /// An observer splatting into `sink`.
     pub fn new(sink: &'a mut K) -> Self {
-        Self { sink, dropped: 0 }
+        Self {
+            sink,
+            dropped: 0,
+            weight: 1.0,
+        }
+    }
+
+    /// Multiplies every following splat by `weight` (the render loop sets it per chain).
+    pub fn set_weight(&mut self, weight: f64) {
+        self.weight = weight;
     }
 }
 
@@ -194,7 +206,8 @@ impl<S, P: SplatPayload, K: SplatSink> Observer<S, P> for SplatObserver<'_, K> {
         if weight == 0.0 || sample.log_density == f64::NEG_INFINITY {
             return;
         }
-        let inv_f = (-sample.log_density).exp();
+        // `* 1.0` is exact: the joint allocation's images are unchanged bit for bit.
+        let inv_f = (-sample.log_density).exp() * self.weight;
         for s in sample.payload.splats() {
             let added = if stage == 1 {
                 self.sink.add(s, weight * inv_f)

@@ -70,6 +70,7 @@ pub struct PssmltTarget<'s> {
     scene: &'s Scene,
     params: BdptParams,
     size: Vec2,
+    min_depth: u32,
 }
 
 impl<'s> PssmltTarget<'s> {
@@ -79,7 +80,18 @@ impl<'s> PssmltTarget<'s> {
             scene,
             params,
             size: Vec2::new(width as f32, height as f32),
+            min_depth: 0,
         }
+    }
+
+    /// The same target restricted to paths of at least `min_depth` bounces: strategies
+    /// `(s, t)` with `s + t - 2 < min_depth` are neither splatted nor counted in the target
+    /// (for a separate direct-lighting pass that renders the shorter paths, as Mitsuba 0.6's
+    /// PSSMLT `directSamples` and the DRMLT reference implementation do; [`super::direct`]).
+    #[must_use]
+    pub fn with_min_depth(mut self, min_depth: u32) -> Self {
+        self.min_depth = min_depth;
+        self
     }
 }
 
@@ -93,11 +105,14 @@ impl Target for PssmltTarget<'_> {
         splats.clear();
         Sampler::start_stream(x, Stream::Camera);
         let p_raster = x.next_2d() * self.size;
+        let min_vertices = self.min_depth.saturating_add(2);
         bdpt::sample(self.scene, x, p_raster, &self.params, true, scratch, |sp| {
-            splats.push(Splat {
-                raster: sp.p_raster.to_array(),
-                rgb: sp.l.to_array(),
-            });
+            if u32::from(sp.s) + u32::from(sp.t) >= min_vertices {
+                splats.push(Splat {
+                    raster: sp.p_raster.to_array(),
+                    rgb: sp.l.to_array(),
+                });
+            }
         });
         log_of_total_luminance(splats)
     }
@@ -159,4 +174,73 @@ impl Target for MmltTarget<'_> {
         }
         log_of_total_luminance(splats)
     }
+}
+
+/// Samples per block of [`mmlt_depth_normalization`] (summed in order: bit-identical for any
+/// thread count).
+const NORMALIZATION_BLOCK: u64 = 4096;
+
+/// An estimate of every MMLT target's integral `b_d` (depths `0..=params.max_depth`) from
+/// `samples` all-strategy BDPT samples: the luminance of each sample's MIS-weighted
+/// contributions, summed per path depth `s + t - 2` and averaged (pbrt's BDPT over primary
+/// sample space, as [`PssmltTarget`] evaluates it; keys independent of the MMLT bootstrap's).
+///
+/// Each BDPT sample evaluates every strategy of every depth, so a strategy that alone finds
+/// some light (a camera path hitting a small light through glass: `s = 0`) is tried once per
+/// sample instead of once per `d + 2` MMLT bootstrap samples of its depth (Hachisuka et al.
+/// 2014, section 4, picks one strategy per sample): the heavy tail of MMLT's per-depth
+/// bootstrap is what makes the default MMLT miss such light in most runs. Both estimate the
+/// same integral (the MIS weights of a depth's strategies sum to one), so the result can
+/// replace the bootstrap's `b_d` (`mcmc_core::render_loop::RenderLoop::run_normalized`).
+/// Returns `None` if cancelled.
+#[must_use]
+pub fn mmlt_depth_normalization(
+    scene: &Scene,
+    params: BdptParams,
+    width: u32,
+    height: u32,
+    samples: u64,
+    seed: u64,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Option<Vec<f64>> {
+    use rayon::prelude::*;
+    let depths = params.max_depth.min(bdpt::MAX_VERTICES as u32 - 2) as usize + 1;
+    let size = Vec2::new(width as f32, height as f32);
+    let key_seed = mcmc_core::seed::mix64(seed ^ 0xbd97_a11d_e97b_0001);
+    let blocks = samples.div_ceil(NORMALIZATION_BLOCK);
+    let sums: Vec<Option<Vec<f64>>> = (0..blocks)
+        .into_par_iter()
+        .map_init(
+            || (PssState::new(PATH_STREAMS, 0), BdptScratch::default()),
+            |(state, scratch), block| {
+                if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+                    return None;
+                }
+                let mut sums = vec![0.0f64; depths];
+                let lo = block * NORMALIZATION_BLOCK;
+                for i in lo..(lo + NORMALIZATION_BLOCK).min(samples) {
+                    state.reset(PATH_STREAMS, mcmc_core::seed::chain_seed(key_seed, i));
+                    state.begin();
+                    Sampler::start_stream(state, Stream::Camera);
+                    let p_raster = state.next_2d() * size;
+                    bdpt::sample(scene, state, p_raster, &params, true, scratch, |sp| {
+                        let depth = usize::from(sp.s) + usize::from(sp.t) - 2;
+                        let y = f64::from(luminance(sp.l.to_array()));
+                        if depth < depths && y.is_finite() {
+                            sums[depth] += y;
+                        }
+                    });
+                }
+                Some(sums)
+            },
+        )
+        .collect();
+    let mut total = vec![0.0f64; depths];
+    for block in sums {
+        for (t, s) in total.iter_mut().zip(block?) {
+            *t += s;
+        }
+    }
+    let n = samples.max(1) as f64;
+    Some(total.into_iter().map(|s| s / n).collect())
 }

@@ -8,8 +8,8 @@ use std::time::Duration;
 
 use mcmc_core::controller::{AutoLargeStep, LargeStepEstimate, LargeStepStats, LargeStepTunable};
 use mcmc_core::render_loop::{
-    Both, ChainSlot, IndependentStates, LargeStepMis, LoopBudget, LoopOutput, LoopSettings,
-    RenderLoop, SharedController, SplatPayload,
+    Both, ChainAllocation, ChainSlot, IndependentStates, LargeStepMis, LoopBudget, LoopOutput,
+    LoopSettings, RenderLoop, SharedController, SplatPayload,
 };
 use mcmc_core::stats::AcceptanceStats;
 use mcmc_core::{Controller, Kernel, NoAdaptation, Progress, Target};
@@ -80,6 +80,10 @@ pub struct MltOutput {
     pub b_standard_error: f64,
     /// Bootstrap samples evaluated.
     pub bootstrap_samples: u64,
+    /// The bootstrap estimate `b_d` of each target (MMLT: depth); they sum to `b`.
+    pub target_b: Vec<f64>,
+    /// Chains started per target (MMLT: depth).
+    pub target_chains: Vec<usize>,
     /// Mutations performed (all chains).
     pub mutations: u64,
     /// Acceptance statistics pooled over chains.
@@ -130,7 +134,8 @@ impl<K, F: Fn(ChainSlot, f64) -> K + Sync> MakeKernel<K> for PerChain<F> {
 }
 
 /// Options of an MCMC render's estimator, beside [`MltSettings`] (a separate struct, so that
-/// existing `MltSettings` literals stay valid): see [`render_mlt_with_estimator`].
+/// existing `MltSettings` literals stay valid): see [`render_mlt_with_estimator`]. The
+/// default is [`MltEstimator::plain`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MltEstimator {
     /// Combine the large-step samples with the Metropolis estimator by multiple importance
@@ -144,6 +149,28 @@ pub struct MltEstimator {
     /// efficiency (issue 17)", has the measurement). Two-stage (delayed-rejection) kernels
     /// ignore it.
     pub large_step_mis: bool,
+    /// How chains are spread over the targets (MMLT: depths): pbrt's joint resampling
+    /// (default) or a fixed count per depth with splats scaled by `b_d / n_d`
+    /// (`mcmc_core::render_loop::ChainAllocation`; docs/performance.md, "MMLT robustness").
+    pub chain_allocation: ChainAllocation,
+    /// MMLT only (targets in [`super::MmltTarget::all_depths`] order): stratify the
+    /// bootstrap over the strategy choice, so every primary point of depth `d` is evaluated
+    /// under all `d + 2` strategies ([`super::MmltStrata`]; Hachisuka et al. 2014, section
+    /// 4). Default off.
+    pub strategy_strata: bool,
+}
+
+impl MltEstimator {
+    /// The plain expected-value estimator of Kelemen et al. 2002 (eq. 5) with pbrt's
+    /// bootstrap: every option off (the [`Default`]).
+    #[must_use]
+    pub const fn plain() -> Self {
+        Self {
+            large_step_mis: false,
+            chain_allocation: ChainAllocation::Joint,
+            strategy_strata: false,
+        }
+    }
 }
 
 /// Runs an MCMC render over one or more targets (PSSMLT: one; MMLT: one per path depth)
@@ -195,6 +222,63 @@ where
     T::Payload: SplatPayload,
     K: Kernel<T> + LargeStepTunable + Send,
 {
+    render_mlt_inner(
+        targets,
+        make_kernel,
+        settings,
+        estimator,
+        None,
+        progress,
+        cancel,
+    )
+}
+
+/// As [`render_mlt_with_estimator`] with each target's integral given (`normalization[d]`,
+/// one per target; MMLT: [`super::mmlt_depth_normalization`], all-strategy BDPT samples)
+/// instead of the bootstrap's estimate: chains are allocated per target in proportion to it
+/// and each target's splats scaled by `normalization[d] / n_d`
+/// (`mcmc_core::render_loop::RenderLoop::run_normalized`: consistent, the bootstrap then only
+/// picks the chain starts). A `normalization` of the wrong length gives a black image with a
+/// message.
+pub fn render_mlt_normalized<T, K>(
+    targets: &[T],
+    make_kernel: impl MakeKernel<K>,
+    settings: &MltSettings,
+    estimator: MltEstimator,
+    normalization: &[f64],
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> MltOutput
+where
+    T: Target<State = PssState>,
+    T::Payload: SplatPayload,
+    K: Kernel<T> + LargeStepTunable + Send,
+{
+    render_mlt_inner(
+        targets,
+        make_kernel,
+        settings,
+        estimator,
+        Some(normalization),
+        progress,
+        cancel,
+    )
+}
+
+fn render_mlt_inner<T, K>(
+    targets: &[T],
+    make_kernel: impl MakeKernel<K>,
+    settings: &MltSettings,
+    estimator: MltEstimator,
+    normalization: Option<&[f64]>,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> MltOutput
+where
+    T: Target<State = PssState>,
+    T::Payload: SplatPayload,
+    K: Kernel<T> + LargeStepTunable + Send,
+{
     let pixels = (settings.width * settings.height) as f64;
     let chains = settings.chains.max(1);
     let budget = match settings.budget {
@@ -209,10 +293,25 @@ where
         budget,
         seed: settings.seed,
         large_step_mis: estimator.large_step_mis,
+        chain_allocation: estimator.chain_allocation,
         ..LoopSettings::default()
     };
-    let states = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
+    let fresh = FreshPss::new(settings.streams.clamp(1, pss::MAX_STREAMS))
         .unwrap_or_else(|_| unreachable!("clamped to 1..=4"));
+    let strata = estimator.strategy_strata.then(|| {
+        super::MmltStrata::new(
+            settings.streams,
+            targets
+                .len()
+                .saturating_sub(1)
+                .try_into()
+                .unwrap_or(u32::MAX),
+        )
+    });
+    let states: &dyn IndependentStates<PssState> = match &strata {
+        Some(s) => s,
+        None => &fresh,
+    };
     let (w, h) = (settings.width, settings.height);
     let stage_map = settings.stage_map;
     let sink = || StagedSplats::new(w, h, stage_map);
@@ -226,14 +325,17 @@ where
     };
     match settings.large_step {
         LargeStepMode::Fixed(p) => {
-            let out = RenderLoop {
+            let render_loop = RenderLoop {
                 targets,
-                states: &states,
+                states,
                 kernel: |slot| wrap(slot, make_kernel.make(slot, p)),
                 controller: |_| NoAdaptation,
                 sink,
-            }
-            .run(&loop_settings, progress, cancel);
+            };
+            let out = match normalization {
+                Some(nb) => render_loop.run_normalized(&loop_settings, nb, progress, cancel),
+                None => render_loop.run(&loop_settings, progress, cancel),
+            };
             finish(out, settings, p, |_| None)
         }
         LargeStepMode::Auto {
@@ -249,16 +351,19 @@ where
             // The first round ends exactly when every chain has run its estimation phase.
             loop_settings.round_mutations = steps;
             let total = steps.saturating_mul(chains as u64);
-            let out = RenderLoop {
+            let render_loop = RenderLoop {
                 targets,
-                states: &states,
+                states,
                 kernel: |slot| wrap(slot, make_kernel.make(slot, initial)),
                 controller: |_| {
                     AutoLargeStep::pooled(total).unwrap_or_else(|_| unreachable!("total >= 1"))
                 },
                 sink,
-            }
-            .run(&loop_settings, progress, cancel);
+            };
+            let out = match normalization {
+                Some(nb) => render_loop.run_normalized(&loop_settings, nb, progress, cancel),
+                None => render_loop.run(&loop_settings, progress, cancel),
+            };
             finish(out, settings, initial, |pooled: &LargeStepStats| {
                 (pooled.steps() >= total).then(|| pooled.estimate())
             })
@@ -454,6 +559,8 @@ fn finish<Sh>(
                 b: 0.0,
                 b_standard_error: 0.0,
                 bootstrap_samples: 0,
+                target_b: Vec::new(),
+                target_chains: Vec::new(),
                 mutations: 0,
                 stats: AcceptanceStats::default(),
                 large_step: None,
@@ -488,6 +595,8 @@ fn finish<Sh>(
         b: out.b,
         b_standard_error: out.b_standard_error,
         bootstrap_samples: out.bootstrap_samples,
+        target_b: out.target_b,
+        target_chains: out.target_chains,
         mutations: out.mutations,
         stats: out.stats,
         final_large_step_probability: large_step.map_or(initial_p, |e| e.large_step_probability),
