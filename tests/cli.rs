@@ -1066,3 +1066,63 @@ fn raster_mutation_flag_sets_the_probability() {
         ],
     );
 }
+
+/// MMLT's robustness options (issue 17, item 3; docs/performance.md, "MMLT robustness"):
+/// `--chain-allocation per-depth`, `--strategy-strata on` and `--bdpt-normalization N` render
+/// (the normalisation is named in the notes); bad values are refused with the flag named.
+#[test]
+fn mmlt_robustness_flags_render_and_bad_values_are_named() {
+    let dir = temp_dir("mmlt-robust");
+    let out = dir.join("mmlt.exr");
+    let output = chainlight(&[
+        "render",
+        "--integrator",
+        "mmlt",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "2",
+        "--bootstrap-samples",
+        "2000",
+        "--chains",
+        "16",
+        "--chain-allocation",
+        "per-depth",
+        "--strategy-strata",
+        "on",
+        "--bdpt-normalization",
+        "2000",
+        "-o",
+        path_str(&out),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = format!("{}{}", stdout(&output), stderr(&output));
+    assert!(text.contains("MMLT depth normalisation"), "{text}");
+    assert!(read_exr(&out).unwrap().mean_luminance() > 0.0);
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "mmlt",
+            "--chain-allocation",
+            "random",
+        ],
+        &[
+            "--chain-allocation",
+            "expected joint or per-depth",
+            "random",
+        ],
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "mmlt",
+            "--strategy-strata",
+            "maybe",
+        ],
+        &["--strategy-strata", "expected on or off", "maybe"],
+    );
+}
