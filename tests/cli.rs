@@ -1009,18 +1009,19 @@ fn large_step_mis_defaults_per_integrator_and_can_be_set() {
     }
 }
 
-/// `--raster-mutation off|on|P` (issue 17, item 2): off by default; `on` is
-/// `pss::RASTER_DEFAULT_PROBABILITY`; the render says when raster steps are taken; a bad value
-/// names the flag.
+/// `--raster-mutation off|on|P` (issue 17, item 2): on (0.5) by default for pssmlt, off for
+/// mmlt; `on` is `pss::RASTER_DEFAULT_PROBABILITY`; the render says when raster steps are
+/// taken; a bad value names the flag.
 #[test]
 fn raster_mutation_flag_sets_the_probability() {
     let dir = temp_dir("raster-mutation");
     let out = dir.join("raster.exr");
     for (integrator, flag, expect) in [
-        ("pssmlt", None, None),
-        ("pssmlt", Some("on"), Some("raster mutation: 0.25 ")),
-        ("mmlt", Some("0.5"), Some("raster mutation: 0.5 ")),
+        ("pssmlt", None, Some("raster mutation: 0.5 ")),
+        ("pssmlt", Some("0.25"), Some("raster mutation: 0.25 ")),
         ("pssmlt", Some("off"), None),
+        ("mmlt", None, None),
+        ("mmlt", Some("on"), Some("raster mutation: 0.5 ")),
     ] {
         let mut args = vec![
             "render",

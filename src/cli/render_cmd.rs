@@ -103,9 +103,9 @@ pub(crate) struct RenderArgs {
     bdpt_normalization: u64,
     /// pssmlt, mmlt: raster (image-plane) mutation after LuxCore's: with probability P a small
     /// step moves only the two raster numbers, by 1 pixel to 10% of the image (Kelemen-style,
-    /// log-uniform per axis); `on` is P = 0.25 [default: off].
-    #[arg(long, value_name = "off|on|P", default_value = "off", value_parser = parse::raster_mutation)]
-    raster_mutation: f64,
+    /// log-uniform per axis); `on` is P = 0.5 [default: on for pssmlt, off for mmlt].
+    #[arg(long, value_name = "off|on|P", value_parser = parse::raster_mutation)]
+    raster_mutation: Option<f64>,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
     /// al. 2002) or `gaussian=SIGMA` with SIGMA in (0, 10] (pbrt-v3 uses gaussian=0.01).
     #[arg(long, value_name = "kelemen|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]
@@ -291,7 +291,9 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             mmlt_chain_allocation: args.chain_allocation,
             mmlt_strategy_strata: args.strategy_strata,
             mmlt_bdpt_normalization: args.bdpt_normalization,
-            raster: pss::RasterParams::with_probability(args.raster_mutation),
+            raster: args
+                .raster_mutation
+                .map(pss::RasterParams::with_probability),
         },
         strategy_images: args.strategy_images,
     }

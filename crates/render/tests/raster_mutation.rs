@@ -155,7 +155,7 @@ fn session_settings(integrator: IntegratorKind, threads: usize, raster: f64) -> 
         mcmc: McmcSettings {
             bootstrap_samples: 5_000,
             chains: 16,
-            raster: RasterParams::with_probability(raster),
+            raster: Some(RasterParams::with_probability(raster)),
             ..McmcSettings::default()
         },
         ..RenderSettings::default()
