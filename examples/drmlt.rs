@@ -183,10 +183,12 @@ impl Method {
     }
 
     fn settings(self, size: u32, budget: Budget, seed: u64) -> RenderSettings {
-        // The plain estimator, as measured in docs/methods/drmlt.md (PSSMLT's default became
-        // large-step MIS later: issue 17; the DR kernels do not use it).
+        // The plain estimator and no raster steps, as measured in docs/methods/drmlt.md
+        // (PSSMLT's defaults became large-step MIS and raster steps later: issue 17; the DR
+        // kernels use neither).
         let mut mcmc = McmcSettings {
             large_step_mis: Some(false),
+            raster: Some(pss::RasterParams::off()),
             ..McmcSettings::default()
         };
         let integrator = match self {
@@ -212,6 +214,7 @@ impl Method {
             max_depth: 5,
             mcmc,
             strategy_images: false,
+            roulette: None,
         }
     }
 }

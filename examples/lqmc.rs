@@ -374,13 +374,15 @@ impl Method {
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             seed,
             max_depth: 5,
-            // The plain estimator, as measured in docs/methods/lqmc.md (PSSMLT's default
-            // became large-step MIS later: issue 17).
+            // The plain estimator and no raster steps, as measured in docs/methods/lqmc.md
+            // (PSSMLT's defaults became large-step MIS and raster steps later: issue 17).
             mcmc: McmcSettings {
                 large_step_mis: Some(false),
+                raster: Some(pss::RasterParams::off()),
                 ..McmcSettings::default()
             },
             strategy_images: false,
+            roulette: None,
         }
     }
 }

@@ -190,12 +190,15 @@ fn main() {
                 mcmc: McmcSettings {
                     large_step,
                     bootstrap_samples: 20_000,
-                    // The plain estimator, as measured in docs/methods/large-step-control.md
-                    // (PSSMLT's default became large-step MIS later: issue 17).
+                    // The plain estimator and no raster steps, as measured in
+                    // docs/methods/large-step-control.md (PSSMLT's defaults became large-step
+                    // MIS and raster steps later: issue 17).
                     large_step_mis: Some(false),
+                    raster: Some(pss::RasterParams::off()),
                     ..McmcSettings::default()
                 },
                 strategy_images: false,
+                roulette: None,
             };
             let start = std::time::Instant::now();
             let out =

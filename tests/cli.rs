@@ -1068,6 +1068,91 @@ fn raster_mutation_flag_sets_the_probability() {
     );
 }
 
+/// `--roulette off|N` and `--small-step kelemen=S1,S2` (issue 17, item 1) and
+/// `--direct-samples N` (item 2): bad values name the flag and the allowed range; good ones
+/// render, and the direct pass says so in the log.
+#[test]
+fn roulette_small_step_and_direct_pass_flags() {
+    assert_fails_with(
+        &["render", "--integrator", "bdpt", "--roulette", "sometimes"],
+        &["--roulette", "off", "0..=1024", "sometimes"],
+    );
+    assert_fails_with(
+        &["render", "--integrator", "bdpt", "--roulette", "2000"],
+        &["--roulette", "0..=1024"],
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "pssmlt",
+            "--small-step",
+            "kelemen=0.1",
+        ],
+        &["--small-step", "kelemen=S1,S2"],
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "pssmlt",
+            "--small-step",
+            "kelemen=0.2,0.1",
+        ],
+        &["--small-step", "0 < s1 < s2 <= 0.5"],
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "pssmlt",
+            "--direct-samples",
+            "70000",
+        ],
+        &["--direct-samples", "0..=65536"],
+    );
+    let dir = temp_dir("roulette-direct");
+    let out = dir.join("img.exr");
+    for extra in [
+        &["--integrator", "bdpt", "--roulette", "off"][..],
+        &[
+            "--integrator",
+            "pssmlt",
+            "--roulette",
+            "5",
+            "--small-step",
+            "kelemen=0.001,0.05",
+        ][..],
+        &["--integrator", "pssmlt", "--direct-samples", "4"][..],
+    ] {
+        let mut args = vec![
+            "render",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--bootstrap-samples",
+            "2000",
+            "--chains",
+            "16",
+            "-o",
+            path_str(&out),
+        ];
+        args.extend_from_slice(extra);
+        let output = chainlight(&args);
+        assert!(output.status.success(), "{extra:?}: {}", stderr(&output));
+        let text = format!("{}{}", stdout(&output), stderr(&output));
+        assert_eq!(
+            text.contains("direct-lighting pass"),
+            extra.contains(&"--direct-samples"),
+            "{extra:?}: {text}"
+        );
+        assert!(read_exr(&out).unwrap().mean_luminance() > 0.0);
+    }
+}
+
 /// MMLT's robustness options (issue 17, item 3; docs/performance.md, "MMLT robustness"):
 /// `--chain-allocation per-depth`, `--strategy-strata on` and `--bdpt-normalization N` render
 /// (the normalisation is named in the notes); bad values are refused with the flag named.

@@ -37,16 +37,25 @@ pub(crate) fn large_step(text: &str) -> Result<render::mlt::LargeStepMode, Strin
     }
 }
 
-/// `--small-step`: `kelemen` or `gaussian=SIGMA`.
+/// `--small-step`: `kelemen`, `kelemen=S1,S2` or `gaussian=SIGMA`.
 pub(crate) fn small_step(text: &str) -> Result<pss::SmallMutation, String> {
     if text.eq_ignore_ascii_case("kelemen") {
         return pss::SmallMutation::kelemen(pss::KelemenParams::kelemen2002())
             .map_err(|e| e.to_string());
     }
+    let expected =
+        || format!("expected `kelemen`, `kelemen=S1,S2` or `gaussian=SIGMA`, got '{text}'");
+    if let Some(pair) = text.strip_prefix("kelemen=") {
+        let (s1, s2) = pair.split_once(',').ok_or_else(expected)?;
+        let s1 = s1.trim().parse::<f64>().map_err(|_| expected())?;
+        let s2 = s2.trim().parse::<f64>().map_err(|_| expected())?;
+        return pss::SmallMutation::kelemen(pss::KelemenParams { s1, s2 })
+            .map_err(|e| e.to_string());
+    }
     let sigma = text
         .strip_prefix("gaussian=")
         .and_then(|v| v.parse::<f64>().ok())
-        .ok_or_else(|| format!("expected `kelemen` or `gaussian=SIGMA`, got '{text}'"))?;
+        .ok_or_else(expected)?;
     pss::SmallMutation::gaussian(sigma).map_err(|e| e.to_string())
 }
 
@@ -197,6 +206,19 @@ pub(crate) fn on_off(text: &str) -> Result<bool, String> {
         "on" => Ok(true),
         "off" => Ok(false),
         _ => Err(format!("expected on or off, got '{text}'")),
+    }
+}
+
+/// `--roulette`: `off` or the first bounce where roulette may stop a subpath, 0..=1024.
+pub(crate) fn roulette(text: &str) -> Result<render::bdpt::Roulette, String> {
+    if text == "off" {
+        return Ok(render::bdpt::Roulette { start: None });
+    }
+    match text.parse::<u32>() {
+        Ok(n) if n <= 1024 => Ok(render::bdpt::Roulette { start: Some(n) }),
+        _ => Err(format!(
+            "expected `off` or a bounce count in 0..=1024, got `{text}`"
+        )),
     }
 }
 

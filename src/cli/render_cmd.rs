@@ -86,6 +86,11 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "on|off", value_parser = parse::on_off,
           action = clap::ArgAction::Set)]
     large_step_mis: Option<bool>,
+    /// pssmlt, mmlt: raster (image-plane) mutation after LuxCore's: with probability P a small
+    /// step moves only the two raster numbers, by 1 pixel to 10% of the image (Kelemen-style,
+    /// log-uniform per axis); `on` is P = 0.5 [default: on for pssmlt, off for mmlt].
+    #[arg(long, value_name = "off|on|P", value_parser = parse::raster_mutation)]
+    raster_mutation: Option<f64>,
     /// mmlt: how chains are spread over path depths, `joint` (pbrt's resampling over all
     /// depths) or `per-depth` (a fixed count per depth, proportional to its bootstrap
     /// estimate, splats scaled by b_d / n_d).
@@ -101,14 +106,16 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 0,
           value_parser = clap::value_parser!(u64).range(0..=100_000_000))]
     bdpt_normalization: u64,
-    /// pssmlt, mmlt: raster (image-plane) mutation after LuxCore's: with probability P a small
-    /// step moves only the two raster numbers, by 1 pixel to 10% of the image (Kelemen-style,
-    /// log-uniform per axis); `on` is P = 0.5 [default: on for pssmlt, off for mmlt].
-    #[arg(long, value_name = "off|on|P", value_parser = parse::raster_mutation)]
-    raster_mutation: Option<f64>,
+    /// pssmlt: a separate direct-lighting pass (Mitsuba 0.6's `directSamples`): BDPT renders
+    /// path depths 0 and 1 at N samples per pixel first (under --time at most a quarter of
+    /// the time), the chains only depths >= 2; 0..=65536, 0 = off [default: 0].
+    #[arg(long, value_name = "N", default_value_t = 0,
+          value_parser = clap::value_parser!(u32).range(0..=65_536))]
+    direct_samples: u32,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
-    /// al. 2002) or `gaussian=SIGMA` with SIGMA in (0, 10] (pbrt-v3 uses gaussian=0.01).
-    #[arg(long, value_name = "kelemen|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]
+    /// al. 2002), `kelemen=S1,S2` (0 < S1 < S2 <= 0.5) or `gaussian=SIGMA` with SIGMA in
+    /// (0, 10] (pbrt-v3 uses gaussian=0.01).
+    #[arg(long, value_name = "kelemen|kelemen=S1,S2|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]
     small_step: SmallMutation,
     /// MCMC integrators: number of Markov chains, 1..=1000000.
     #[arg(long, value_name = "N", default_value_t = 256,
@@ -119,6 +126,11 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 100_000,
           value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
     bootstrap_samples: u32,
+    /// bdpt, pssmlt (and drmlt over it): Russian roulette of the subpaths, `off`, or `N` (from
+    /// N bounces on, 0..=1024; continue with probability min(0.95, f cos / pdf of the last
+    /// bounce)) [default: 3]. MMLT-based integrators never use roulette; pt keeps pbrt-v4's.
+    #[arg(long, value_name = "off|N", value_parser = parse::roulette)]
+    roulette: Option<render::bdpt::Roulette>,
     /// BDPT only: also write the MIS-weighted image of every strategy (s, t) next to the
     /// output, as `<stem>_s<S>_t<T>.exr`.
     #[arg(long)]
@@ -288,14 +300,18 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             perturbation: args.perturbation,
             adapt: args.adapt,
             large_step_mis: args.large_step_mis,
-            mmlt_chain_allocation: args.chain_allocation,
-            mmlt_strategy_strata: args.strategy_strata,
-            mmlt_bdpt_normalization: args.bdpt_normalization,
             raster: args
                 .raster_mutation
                 .map(pss::RasterParams::with_probability),
+            mmlt_chain_allocation: args.chain_allocation,
+            mmlt_strategy_strata: args.strategy_strata,
+            mmlt_bdpt_normalization: args.bdpt_normalization,
+            direct: render::mlt::direct::DirectPass {
+                samples_per_pixel: args.direct_samples,
+            },
         },
         strategy_images: args.strategy_images,
+        roulette: args.roulette,
     }
 }
 

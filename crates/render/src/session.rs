@@ -56,6 +56,13 @@ pub struct McmcSettings {
     /// MMLT; docs/performance.md, "Equal-time efficiency (issue 17)"). Other integrators
     /// ignore it.
     pub large_step_mis: Option<bool>,
+    /// PSSMLT and MMLT: raster (image-plane) mutation, LuxCore's image mutation read as a
+    /// separate move ([`pss::RasterParams`], [`pss::RasterStep`]): with probability
+    /// `raster.probability` a small step moves only the two raster numbers of the camera
+    /// stream. `None` (default): the integrator's measured default,
+    /// [`raster_mutation_default`] (docs/performance.md, "Raster mutation (issue 17, item
+    /// 2)"). Other integrators ignore it.
+    pub raster: Option<pss::RasterParams>,
     /// MMLT: how chains are spread over path depths (`--chain-allocation`;
     /// [`crate::mlt::MltEstimator::chain_allocation`]). Default: joint resampling (pbrt's
     /// scheme; docs/performance.md, "MMLT robustness (issue 17, item 3)"). Other integrators
@@ -70,13 +77,11 @@ pub struct McmcSettings {
     /// [`crate::mlt::render_mlt_normalized`]) instead of from the bootstrap; 0 (default): the
     /// bootstrap's. Other integrators ignore it.
     pub mmlt_bdpt_normalization: u64,
-    /// PSSMLT and MMLT: raster (image-plane) mutation, LuxCore's image mutation read as a
-    /// separate move ([`pss::RasterParams`], [`pss::RasterStep`]): with probability
-    /// `raster.probability` a small step moves only the two raster numbers of the camera
-    /// stream. `None` (default): the integrator's measured default,
-    /// [`raster_mutation_default`] (docs/performance.md, "Raster mutation (issue 17, item
-    /// 2)"). Other integrators ignore it.
-    pub raster: Option<pss::RasterParams>,
+    /// PSSMLT: a separate direct-lighting pass (`--direct-samples N`; [`crate::mlt::direct`],
+    /// Mitsuba 0.6's `directSamples`): BDPT renders depths 0 and 1 at N samples per pixel and
+    /// the chains only depths >= 2. Default off (docs/performance.md, "Direct-lighting pass
+    /// (issue 17, item 2)"). Other integrators ignore it.
+    pub direct: crate::mlt::direct::DirectPass,
 }
 
 impl Default for McmcSettings {
@@ -92,10 +97,11 @@ impl Default for McmcSettings {
             perturbation: pathspace::PerturbationKind::Lens,
             adapt: crate::mlt::pathmlt::PathAdapt::Fixed,
             large_step_mis: None,
+            raster: None,
             mmlt_chain_allocation: mcmc_core::render_loop::ChainAllocation::Joint,
             mmlt_strategy_strata: false,
             mmlt_bdpt_normalization: 0,
-            raster: None,
+            direct: crate::mlt::direct::DirectPass::OFF,
         }
     }
 }
@@ -151,6 +157,12 @@ pub struct RenderSettings {
     pub mcmc: McmcSettings,
     /// BDPT only: also return the MIS-weighted image of every strategy `(s, t)`.
     pub strategy_images: bool,
+    /// Russian roulette of BDPT and of the MCMC samplers whose subpaths use it (`bdpt`,
+    /// `pssmlt`, `drmlt` over PSSMLT): `None` (default) keeps [`BdptParams::default`]'s
+    /// (from 3 bounces on); MMLT-based samplers never use roulette (fixed path length), `pt`
+    /// keeps its own (pbrt-v4's, [`crate::integrator::pt::ROULETTE_DEPTH`]).
+    /// docs/performance.md, "Equal-time efficiency (issue 17)", has the measurements.
+    pub roulette: Option<bdpt::Roulette>,
 }
 
 impl Default for RenderSettings {
@@ -166,6 +178,7 @@ impl Default for RenderSettings {
             max_depth: 5,
             mcmc: McmcSettings::default(),
             strategy_images: false,
+            roulette: None,
         }
     }
 }
@@ -332,9 +345,11 @@ fn emitter_notes(scene: &Scene) -> Vec<String> {
 
 /// BDPT's parameters (shared by BDPT and the MCMC path samplers) for `settings`.
 fn bdpt_params(settings: &RenderSettings) -> BdptParams {
+    let defaults = BdptParams::default();
     BdptParams {
         max_depth: settings.max_depth,
-        ..BdptParams::default()
+        roulette: settings.roulette.unwrap_or(defaults.roulette),
+        ..defaults
     }
 }
 
@@ -456,6 +471,44 @@ fn render_bidirectional(
                 .unwrap_or_else(|_| unreachable!("clamped")),
         )
     };
+    // PSSMLT's separate direct-lighting pass (`mlt::direct`), rendered first; under a time
+    // budget the chains get what is left.
+    let direct = (settings.integrator == IntegratorKind::Pssmlt
+        && m.direct.applies_to(settings.max_depth))
+    .then(|| {
+        let t0 = Instant::now();
+        let cap = match settings.budget {
+            Budget::Time(t) => Some(t.mul_f64(mlt::direct::DIRECT_TIME_SHARE)),
+            Budget::SamplesPerPixel(_) => None,
+        };
+        let pass = mlt::direct::render_direct(
+            scene,
+            &params,
+            m.direct,
+            settings.seed,
+            cap,
+            progress,
+            cancel,
+        );
+        notes.push(format!(
+            "direct-lighting pass: depths 0-{} by BDPT at {} spp ({:.2} s); the chains sample depths >= {}",
+            mlt::direct::DIRECT_MAX_DEPTH,
+            pass.spp,
+            t0.elapsed().as_secs_f64(),
+            mlt::direct::DIRECT_MAX_DEPTH + 1
+        ));
+        (pass, t0.elapsed())
+    });
+    let min_depth = if direct.is_some() {
+        m.direct.chain_min_depth(settings.max_depth)
+    } else {
+        0
+    };
+    let mut mlt_settings = mlt_settings;
+    if let (Some((_, spent)), MltBudget::Time(t)) = (&direct, mlt_settings.budget) {
+        mlt_settings.budget =
+            MltBudget::Time(t.saturating_sub(*spent).max(Duration::from_millis(1)));
+    }
     let out = if let Some(variant) = settings.integrator.mala_variant() {
         let config = MalaConfig { variant, ..m.mala };
         notes.push(mala_note(&config));
@@ -595,7 +648,7 @@ fn render_bidirectional(
                 cancel,
             )
         } else {
-            let targets = [PssmltTarget::new(scene, params, w, h)];
+            let targets = [PssmltTarget::new(scene, params, w, h).with_min_depth(min_depth)];
             mlt::render_mlt_with_estimator(
                 &targets,
                 kernel,
@@ -626,11 +679,18 @@ fn render_bidirectional(
             e.eta_s, e.eta_l, e.eta_0, e.small_steps, e.large_steps, e.large_step_probability
         ));
     }
+    let mut image = out.image;
+    let (mut dropped, mut cancelled) = (out.dropped + out.non_finite, out.cancelled);
+    if let Some((pass, _)) = &direct {
+        mlt::direct::add_into(&mut image, &pass.image);
+        dropped += pass.dropped;
+        cancelled |= pass.cancelled;
+    }
     RenderOutput {
-        image: out.image,
+        image,
         samples: out.mutations,
-        dropped_nonfinite: out.dropped + out.non_finite,
-        cancelled: out.cancelled,
+        dropped_nonfinite: dropped,
+        cancelled,
         elapsed: start.elapsed(),
         notes,
         strategy_images: Vec::new(),

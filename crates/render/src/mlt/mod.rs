@@ -1,6 +1,7 @@
 //! Markov chain Monte Carlo integrators over primary sample space: the path-sampler targets
 //! (PSSMLT over BDPT, MMLT) run through mcmc-core's generic render loop.
 
+pub mod direct;
 pub mod dr;
 pub mod mala;
 mod path_sampler;

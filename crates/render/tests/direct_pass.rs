@@ -1,0 +1,175 @@
+//! PSSMLT with a separate direct-lighting pass (`render::mlt::direct`): BDPT at depth <= 1
+//! plus chains restricted to depths >= 2 converges to the BDPT reference of the full image
+//! (Cornell box, depth 5), and two negative controls fail the same comparison: the restricted
+//! chains without the pass (direct light missing) and the pass added to unrestricted chains
+//! (direct light counted twice).
+//!
+//! Statistics as in `mlt_convergence.rs` (its module comment): `R` independent replicates per
+//! estimate against `K` independent BDPT references, Welch t on the image mean and on
+//! `BLOCKS x BLOCKS` block means, critical value Bonferroni over this file's `N_COMPARISONS`
+//! at family-wise `ALPHA_FAMILY`, conservative `min(R, K) - 1` degrees of freedom.
+
+mod common;
+
+use std::sync::atomic::AtomicBool;
+use std::sync::OnceLock;
+
+use common::stats::{against_reference, assert_finite_non_negative, mean_se, t_critical};
+use mcmc_core::Mh;
+use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
+use render::bdpt::{render_bdpt, BdptParams};
+use render::image::Image;
+use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_MAX_DEPTH};
+use render::mlt::{
+    render_mlt_with_estimator, LargeStepMode, MltBudget, MltEstimator, MltSettings, PssmltTarget,
+    PATH_STREAMS,
+};
+use render::scene::Scene;
+use render::session::NoProgress;
+
+const ALPHA_FAMILY: f64 = 0.001;
+const R: usize = 16;
+const K: usize = 16;
+const BLOCKS: usize = 4;
+/// The positive case: image mean and blocks. (The negative controls are expected to exceed
+/// the same critical value; they are not null-hypothesis comparisons.)
+const N_COMPARISONS: usize = 1 + BLOCKS * BLOCKS;
+const SIZE: u32 = 16;
+const DEPTH: u32 = 5;
+const PASS: DirectPass = DirectPass {
+    samples_per_pixel: 16,
+};
+
+fn critical() -> f64 {
+    t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R.min(K) - 1) as u32)
+}
+
+fn cornell() -> &'static Scene {
+    static SCENE: OnceLock<Scene> = OnceLock::new();
+    SCENE.get_or_init(|| Scene::cornell_box(SIZE, SIZE))
+}
+
+fn params() -> BdptParams {
+    BdptParams {
+        max_depth: DEPTH,
+        ..BdptParams::default()
+    }
+}
+
+/// `K` independent BDPT renders of the full image, 256 spp.
+fn reference() -> &'static [Image] {
+    static REFERENCE: OnceLock<Vec<Image>> = OnceLock::new();
+    REFERENCE.get_or_init(|| {
+        (0..K as u64)
+            .map(|k| {
+                render_bdpt(
+                    cornell(),
+                    &params(),
+                    Some(256),
+                    None,
+                    71_000 + k,
+                    false,
+                    &NoProgress,
+                    &AtomicBool::new(false),
+                )
+                .image
+            })
+            .collect()
+    })
+}
+
+/// One replicate: PSSMLT (large-step MIS on, as the CLI default) whose chains sample depths
+/// `>= chain_min_depth`, plus the direct pass if `with_pass`.
+fn replicate(seed: u64, chain_min_depth: u32, with_pass: bool) -> Image {
+    let settings = MltSettings {
+        width: SIZE as usize,
+        height: SIZE as usize,
+        chains: 64,
+        bootstrap_samples: 20_000,
+        budget: MltBudget::MutationsPerPixel(64.0),
+        large_step: LargeStepMode::Fixed(0.3),
+        seed,
+        streams: PATH_STREAMS,
+        stage_map: false,
+    };
+    let kernel = |p: f64| {
+        let small = SmallStep::new(SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap());
+        Mh::new(PssmltProposal::new(small, p).unwrap())
+    };
+    let cancel = AtomicBool::new(false);
+    let target = PssmltTarget::new(cornell(), params(), SIZE, SIZE).with_min_depth(chain_min_depth);
+    let estimator = MltEstimator {
+        large_step_mis: true,
+        ..MltEstimator::plain()
+    };
+    let out = render_mlt_with_estimator(
+        &[target],
+        kernel,
+        &settings,
+        estimator,
+        &NoProgress,
+        &cancel,
+    );
+    assert!(out.message.is_none(), "{:?}", out.message);
+    let mut image = out.image;
+    if with_pass {
+        let pass = render_direct(cornell(), &params(), PASS, seed, None, &NoProgress, &cancel);
+        assert_eq!(pass.spp, PASS.samples_per_pixel);
+        add_into(&mut image, &pass.image);
+    }
+    assert_finite_non_negative(&image, "direct pass replicate");
+    image
+}
+
+fn replicates(seed0: u64, chain_min_depth: u32, with_pass: bool) -> Vec<Image> {
+    (0..R as u64)
+        .map(|r| replicate(seed0 + r, chain_min_depth, with_pass))
+        .collect()
+}
+
+/// The image-mean t statistic against the reference.
+fn mean_t(images: &[Image]) -> f64 {
+    let (mm, sm) = mean_se(&images.iter().map(Image::mean_luminance).collect::<Vec<_>>());
+    let (mr, sr) = mean_se(
+        &reference()
+            .iter()
+            .map(Image::mean_luminance)
+            .collect::<Vec<_>>(),
+    );
+    (mm - mr) / sm.hypot(sr)
+}
+
+#[test]
+fn pssmlt_with_a_direct_pass_converges_to_bdpt() {
+    assert!(PASS.applies_to(DEPTH));
+    let min_depth = PASS.chain_min_depth(DEPTH);
+    assert_eq!(min_depth, DIRECT_MAX_DEPTH + 1);
+    let images = replicates(40_000, min_depth, true);
+    against_reference(
+        "cornell PSSMLT + direct pass",
+        &images,
+        reference(),
+        BLOCKS,
+        critical(),
+    );
+}
+
+#[test]
+fn negative_controls_missing_or_doubled_direct_light_fail() {
+    let crit = critical();
+    // The restricted chains alone: direct light is missing.
+    let missing = mean_t(&replicates(41_000, PASS.chain_min_depth(DEPTH), false));
+    // The pass added to chains over every depth: direct light counted twice.
+    let doubled = mean_t(&replicates(42_000, 0, true));
+    eprintln!(
+        "negative controls: t missing {missing:.1}, t doubled {doubled:.1}, critical {crit:.2}"
+    );
+    assert!(
+        missing < -crit,
+        "missing direct light not detected: t {missing}"
+    );
+    assert!(
+        doubled > crit,
+        "doubled direct light not detected: t {doubled}"
+    );
+}
