@@ -183,12 +183,13 @@ impl Method {
     }
 
     fn settings(self, size: u32, budget: Budget, seed: u64) -> RenderSettings {
-        // The plain estimator and no raster steps, as measured in docs/methods/drmlt.md
-        // (PSSMLT's defaults became large-step MIS and raster steps later: issue 17; the DR
-        // kernels use neither).
+        // The plain estimator, no raster steps and no direct pass, as measured in
+        // docs/methods/drmlt.md (PSSMLT's defaults gained large-step MIS, raster steps and the
+        // direct-lighting pass later: issue 17; the DR kernels use none of them).
         let mut mcmc = McmcSettings {
             large_step_mis: Some(false),
             raster: Some(pss::RasterParams::off()),
+            direct: Some(render::mlt::direct::DirectPass::OFF),
             ..McmcSettings::default()
         };
         let integrator = match self {

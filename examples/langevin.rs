@@ -168,9 +168,11 @@ const METHODS: [(&str, &str, IntegratorKind, Option<DrVariant>, bool); 9] = [
 fn settings(method: usize, size: u32, budget: Budget, seed: u64) -> RenderSettings {
     let (_, _, integrator, dr, code_preset) = METHODS[method];
     let mut mcmc = McmcSettings {
-        // No raster steps for PSSMLT/K, as measured in docs/methods/mala.md (PSSMLT's default
-        // gained them later: issue 17); the MALA variants and MMLT never use them.
+        // No raster steps and no direct-lighting pass for PSSMLT/K, as measured in
+        // docs/methods/mala.md (PSSMLT's defaults gained them later: issue 17); the MALA
+        // variants and MMLT never use them.
         raster: Some(pss::RasterParams::off()),
+        direct: Some(render::mlt::direct::DirectPass::OFF),
         ..McmcSettings::default()
     };
     if code_preset {

@@ -374,11 +374,13 @@ impl Method {
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             seed,
             max_depth: 5,
-            // The plain estimator and no raster steps, as measured in docs/methods/lqmc.md
-            // (PSSMLT's defaults became large-step MIS and raster steps later: issue 17).
+            // The plain estimator, no raster steps and no direct pass, as measured in
+            // docs/methods/lqmc.md (PSSMLT's defaults gained large-step MIS, raster steps and
+            // the direct-lighting pass later: issue 17).
             mcmc: McmcSettings {
                 large_step_mis: Some(false),
                 raster: Some(pss::RasterParams::off()),
+                direct: Some(render::mlt::direct::DirectPass::OFF),
                 ..McmcSettings::default()
             },
             strategy_images: false,

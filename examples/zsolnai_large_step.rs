@@ -190,11 +190,12 @@ fn main() {
                 mcmc: McmcSettings {
                     large_step,
                     bootstrap_samples: 20_000,
-                    // The plain estimator and no raster steps, as measured in
-                    // docs/methods/large-step-control.md (PSSMLT's defaults became large-step
-                    // MIS and raster steps later: issue 17).
+                    // The plain estimator, no raster steps and no direct pass, as measured in
+                    // docs/methods/large-step-control.md (PSSMLT's defaults gained large-step
+                    // MIS, raster steps and the direct-lighting pass later: issue 17).
                     large_step_mis: Some(false),
                     raster: Some(pss::RasterParams::off()),
+                    direct: Some(render::mlt::direct::DirectPass::OFF),
                     ..McmcSettings::default()
                 },
                 strategy_images: false,

@@ -1069,8 +1069,8 @@ fn raster_mutation_flag_sets_the_probability() {
 }
 
 /// `--roulette off|N` and `--small-step kelemen=S1,S2` (issue 17, item 1) and
-/// `--direct-samples N` (item 2): bad values name the flag and the allowed range; good ones
-/// render, and the direct pass says so in the log.
+/// `--direct-samples N` (item 2; default 64 for pssmlt, off elsewhere): bad values name the
+/// flag and the allowed range; good ones render, and the direct pass says so in the log.
 #[test]
 fn roulette_small_step_and_direct_pass_flags() {
     assert_fails_with(
@@ -1113,17 +1113,33 @@ fn roulette_small_step_and_direct_pass_flags() {
     );
     let dir = temp_dir("roulette-direct");
     let out = dir.join("img.exr");
-    for extra in [
-        &["--integrator", "bdpt", "--roulette", "off"][..],
-        &[
-            "--integrator",
-            "pssmlt",
-            "--roulette",
-            "5",
-            "--small-step",
-            "kelemen=0.001,0.05",
-        ][..],
-        &["--integrator", "pssmlt", "--direct-samples", "4"][..],
+    // (arguments, whether the direct pass runs: on by default for pssmlt, 0 turns it off,
+    // never for bdpt or mmlt)
+    for (extra, direct) in [
+        (&["--integrator", "bdpt", "--roulette", "off"][..], false),
+        (
+            &[
+                "--integrator",
+                "pssmlt",
+                "--roulette",
+                "5",
+                "--small-step",
+                "kelemen=0.001,0.05",
+            ][..],
+            true,
+        ),
+        (
+            &["--integrator", "pssmlt", "--direct-samples", "4"][..],
+            true,
+        ),
+        (
+            &["--integrator", "pssmlt", "--direct-samples", "0"][..],
+            false,
+        ),
+        (
+            &["--integrator", "mmlt", "--direct-samples", "4"][..],
+            false,
+        ),
     ] {
         let mut args = vec![
             "render",
@@ -1146,7 +1162,7 @@ fn roulette_small_step_and_direct_pass_flags() {
         let text = format!("{}{}", stdout(&output), stderr(&output));
         assert_eq!(
             text.contains("direct-lighting pass"),
-            extra.contains(&"--direct-samples"),
+            direct,
             "{extra:?}: {text}"
         );
         assert!(read_exr(&out).unwrap().mean_luminance() > 0.0);

@@ -108,10 +108,10 @@ pub(crate) struct RenderArgs {
     bdpt_normalization: u64,
     /// pssmlt: a separate direct-lighting pass (Mitsuba 0.6's `directSamples`): BDPT renders
     /// path depths 0 and 1 at N samples per pixel first (under --time at most a quarter of
-    /// the time), the chains only depths >= 2; 0..=65536, 0 = off [default: 0].
-    #[arg(long, value_name = "N", default_value_t = 0,
+    /// the time), the chains only depths >= 2; 0..=65536, 0 = off [default: 64 for pssmlt].
+    #[arg(long, value_name = "N",
           value_parser = clap::value_parser!(u32).range(0..=65_536))]
-    direct_samples: u32,
+    direct_samples: Option<u32>,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
     /// al. 2002), `kelemen=S1,S2` (0 < S1 < S2 <= 0.5) or `gaussian=SIGMA` with SIGMA in
     /// (0, 10] (pbrt-v3 uses gaussian=0.01).
@@ -306,9 +306,9 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             mmlt_chain_allocation: args.chain_allocation,
             mmlt_strategy_strata: args.strategy_strata,
             mmlt_bdpt_normalization: args.bdpt_normalization,
-            direct: render::mlt::direct::DirectPass {
-                samples_per_pixel: args.direct_samples,
-            },
+            direct: args
+                .direct_samples
+                .map(|samples_per_pixel| render::mlt::direct::DirectPass { samples_per_pixel }),
         },
         strategy_images: args.strategy_images,
         roulette: args.roulette,

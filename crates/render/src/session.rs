@@ -79,9 +79,9 @@ pub struct McmcSettings {
     pub mmlt_bdpt_normalization: u64,
     /// PSSMLT: a separate direct-lighting pass (`--direct-samples N`; [`crate::mlt::direct`],
     /// Mitsuba 0.6's `directSamples`): BDPT renders depths 0 and 1 at N samples per pixel and
-    /// the chains only depths >= 2. Default off (docs/performance.md, "Direct-lighting pass
-    /// (issue 17, item 2)"). Other integrators ignore it.
-    pub direct: crate::mlt::direct::DirectPass,
+    /// the chains only depths >= 2. `None` (default): the integrator's measured default,
+    /// [`direct_pass_default`] (64 samples per pixel for PSSMLT). Other integrators ignore it.
+    pub direct: Option<crate::mlt::direct::DirectPass>,
 }
 
 impl Default for McmcSettings {
@@ -101,7 +101,7 @@ impl Default for McmcSettings {
             mmlt_chain_allocation: mcmc_core::render_loop::ChainAllocation::Joint,
             mmlt_strategy_strata: false,
             mmlt_bdpt_normalization: 0,
-            direct: crate::mlt::direct::DirectPass::OFF,
+            direct: None,
         }
     }
 }
@@ -127,6 +127,22 @@ pub const fn raster_mutation_default(integrator: IntegratorKind) -> pss::RasterP
         pss::RasterParams::with_probability(pss::RASTER_DEFAULT_PROBABILITY)
     } else {
         pss::RasterParams::off()
+    }
+}
+
+/// The direct-lighting pass `integrator` uses by default ([`McmcSettings::direct`]): 64 BDPT
+/// samples per pixel for PSSMLT, which lowered the median equal-time relMSE on two of three
+/// scenes and was even on the third (x0.53 cornell-glass, x0.90 ajar-door, x0.90 caustic-pool
+/// with 1 of 3 seeds better; 128 x 128, max depth 10, 10 s, 2 threads); off for the others
+/// (docs/performance.md, "Direct-lighting pass (issue 17, item 2)").
+#[must_use]
+pub const fn direct_pass_default(integrator: IntegratorKind) -> crate::mlt::direct::DirectPass {
+    if matches!(integrator, IntegratorKind::Pssmlt) {
+        crate::mlt::direct::DirectPass {
+            samples_per_pixel: 64,
+        }
+    } else {
+        crate::mlt::direct::DirectPass::OFF
     }
 }
 
@@ -473,8 +489,9 @@ fn render_bidirectional(
     };
     // PSSMLT's separate direct-lighting pass (`mlt::direct`), rendered first; under a time
     // budget the chains get what is left.
+    let direct_pass = m.direct.unwrap_or(direct_pass_default(settings.integrator));
     let direct = (settings.integrator == IntegratorKind::Pssmlt
-        && m.direct.applies_to(settings.max_depth))
+        && direct_pass.applies_to(settings.max_depth))
     .then(|| {
         let t0 = Instant::now();
         let cap = match settings.budget {
@@ -484,7 +501,7 @@ fn render_bidirectional(
         let pass = mlt::direct::render_direct(
             scene,
             &params,
-            m.direct,
+            direct_pass,
             settings.seed,
             cap,
             progress,
@@ -500,7 +517,7 @@ fn render_bidirectional(
         (pass, t0.elapsed())
     });
     let min_depth = if direct.is_some() {
-        m.direct.chain_min_depth(settings.max_depth)
+        direct_pass.chain_min_depth(settings.max_depth)
     } else {
         0
     };
