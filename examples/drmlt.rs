@@ -189,7 +189,7 @@ impl Method {
         let mut mcmc = McmcSettings {
             large_step_mis: Some(false),
             raster: Some(pss::RasterParams::off()),
-            direct: Some(render::mlt::direct::DirectPass::OFF),
+            direct: Some(render::mlt::direct::DirectPass::Off),
             ..McmcSettings::default()
         };
         let integrator = match self {

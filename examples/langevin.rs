@@ -172,7 +172,7 @@ fn settings(method: usize, size: u32, budget: Budget, seed: u64) -> RenderSettin
         // docs/methods/mala.md (PSSMLT's defaults gained them later: issue 17); the MALA
         // variants and MMLT never use them.
         raster: Some(pss::RasterParams::off()),
-        direct: Some(render::mlt::direct::DirectPass::OFF),
+        direct: Some(render::mlt::direct::DirectPass::Off),
         ..McmcSettings::default()
     };
     if code_preset {

@@ -380,7 +380,7 @@ impl Method {
             mcmc: McmcSettings {
                 large_step_mis: Some(false),
                 raster: Some(pss::RasterParams::off()),
-                direct: Some(render::mlt::direct::DirectPass::OFF),
+                direct: Some(render::mlt::direct::DirectPass::Off),
                 ..McmcSettings::default()
             },
             strategy_images: false,

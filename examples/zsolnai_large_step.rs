@@ -195,7 +195,7 @@ fn main() {
                     // MIS, raster steps and the direct-lighting pass later: issue 17).
                     large_step_mis: Some(false),
                     raster: Some(pss::RasterParams::off()),
-                    direct: Some(render::mlt::direct::DirectPass::OFF),
+                    direct: Some(render::mlt::direct::DirectPass::Off),
                     ..McmcSettings::default()
                 },
                 strategy_images: false,

@@ -108,7 +108,8 @@ pub(crate) struct RenderArgs {
     bdpt_normalization: u64,
     /// pssmlt: a separate direct-lighting pass (Mitsuba 0.6's `directSamples`): BDPT renders
     /// path depths 0 and 1 at N samples per pixel first (under --time at most a quarter of
-    /// the time), the chains only depths >= 2; 0..=65536, 0 = off [default: 64 for pssmlt].
+    /// the time), the chains only depths >= 2; 0..=65536, 0 = off [default for pssmlt: half
+    /// a sample per mutation per pixel, or a tenth of --time].
     #[arg(long, value_name = "N",
           value_parser = clap::value_parser!(u32).range(0..=65_536))]
     direct_samples: Option<u32>,
@@ -308,7 +309,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             mmlt_bdpt_normalization: args.bdpt_normalization,
             direct: args
                 .direct_samples
-                .map(|samples_per_pixel| render::mlt::direct::DirectPass { samples_per_pixel }),
+                .map(render::mlt::direct::DirectPass::Fixed),
         },
         strategy_images: args.strategy_images,
         roulette: args.roulette,

@@ -80,7 +80,8 @@ pub struct McmcSettings {
     /// PSSMLT: a separate direct-lighting pass (`--direct-samples N`; [`crate::mlt::direct`],
     /// Mitsuba 0.6's `directSamples`): BDPT renders depths 0 and 1 at N samples per pixel and
     /// the chains only depths >= 2. `None` (default): the integrator's measured default,
-    /// [`direct_pass_default`] (64 samples per pixel for PSSMLT). Other integrators ignore it.
+    /// [`direct_pass_default`] (for PSSMLT half a sample per mutation, or a tenth of a time
+    /// budget). Other integrators ignore it.
     pub direct: Option<crate::mlt::direct::DirectPass>,
 }
 
@@ -130,19 +131,19 @@ pub const fn raster_mutation_default(integrator: IntegratorKind) -> pss::RasterP
     }
 }
 
-/// The direct-lighting pass `integrator` uses by default ([`McmcSettings::direct`]): 64 BDPT
-/// samples per pixel for PSSMLT, which lowered the median equal-time relMSE on two of three
-/// scenes and was even on the third (x0.53 cornell-glass, x0.90 ajar-door, x0.90 caustic-pool
-/// with 1 of 3 seeds better; 128 x 128, max depth 10, 10 s, 2 threads); off for the others
-/// (docs/performance.md, "Direct-lighting pass (issue 17, item 2)").
+/// The direct-lighting pass `integrator` uses by default ([`McmcSettings::direct`]): for
+/// PSSMLT [`DirectPass::PSSMLT_DEFAULT`](crate::mlt::direct::DirectPass::PSSMLT_DEFAULT),
+/// about what 64 BDPT samples per pixel were in the 10 s measurement that lowered the median
+/// equal-time relMSE on two of three scenes and was even on the third (x0.53 cornell-glass,
+/// x0.90 ajar-door, x0.90 caustic-pool with 1 of 3 seeds better; 128 x 128, max depth 10,
+/// 2 threads), in proportion to the budget so longer renders do not hit the fixed pass's noise
+/// floor; off for the others (docs/performance.md, "Direct-lighting pass (issue 17, item 2)").
 #[must_use]
 pub const fn direct_pass_default(integrator: IntegratorKind) -> crate::mlt::direct::DirectPass {
     if matches!(integrator, IntegratorKind::Pssmlt) {
-        crate::mlt::direct::DirectPass {
-            samples_per_pixel: 64,
-        }
+        crate::mlt::direct::DirectPass::PSSMLT_DEFAULT
     } else {
-        crate::mlt::direct::DirectPass::OFF
+        crate::mlt::direct::DirectPass::Off
     }
 }
 
@@ -494,16 +495,15 @@ fn render_bidirectional(
         && direct_pass.applies_to(settings.max_depth))
     .then(|| {
         let t0 = Instant::now();
-        let cap = match settings.budget {
-            Budget::Time(t) => Some(t.mul_f64(mlt::direct::DIRECT_TIME_SHARE)),
-            Budget::SamplesPerPixel(_) => None,
+        let budget = match settings.budget {
+            Budget::SamplesPerPixel(n) => direct_pass.budget(Some(f64::from(n)), None),
+            Budget::Time(t) => direct_pass.budget(None, Some(t)),
         };
         let pass = mlt::direct::render_direct(
             scene,
             &params,
-            direct_pass,
+            budget,
             settings.seed,
-            cap,
             progress,
             cancel,
         );

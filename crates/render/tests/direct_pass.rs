@@ -14,10 +14,11 @@ mod common;
 use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
+use common::bdpt_replicates;
 use common::stats::{against_reference, assert_finite_non_negative, mean_se, t_critical};
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
-use render::bdpt::{render_bdpt, BdptParams};
+use render::bdpt::BdptParams;
 use render::image::Image;
 use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_MAX_DEPTH};
 use render::mlt::{
@@ -36,9 +37,7 @@ const BLOCKS: usize = 4;
 const N_COMPARISONS: usize = 1 + BLOCKS * BLOCKS;
 const SIZE: u32 = 16;
 const DEPTH: u32 = 5;
-const PASS: DirectPass = DirectPass {
-    samples_per_pixel: 16,
-};
+const PASS: DirectPass = DirectPass::Fixed(16);
 
 fn critical() -> f64 {
     t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R.min(K) - 1) as u32)
@@ -59,23 +58,7 @@ fn params() -> BdptParams {
 /// `K` independent BDPT renders of the full image, 256 spp.
 fn reference() -> &'static [Image] {
     static REFERENCE: OnceLock<Vec<Image>> = OnceLock::new();
-    REFERENCE.get_or_init(|| {
-        (0..K as u64)
-            .map(|k| {
-                render_bdpt(
-                    cornell(),
-                    &params(),
-                    Some(256),
-                    None,
-                    71_000 + k,
-                    false,
-                    &NoProgress,
-                    &AtomicBool::new(false),
-                )
-                .image
-            })
-            .collect()
-    })
+    REFERENCE.get_or_init(|| bdpt_replicates(cornell(), &params(), 256, K, 71_000))
 }
 
 /// One replicate: PSSMLT (large-step MIS on, as the CLI default) whose chains sample depths
@@ -113,8 +96,10 @@ fn replicate(seed: u64, chain_min_depth: u32, with_pass: bool) -> Image {
     assert!(out.message.is_none(), "{:?}", out.message);
     let mut image = out.image;
     if with_pass {
-        let pass = render_direct(cornell(), &params(), PASS, seed, None, &NoProgress, &cancel);
-        assert_eq!(pass.spp, PASS.samples_per_pixel);
+        let budget = PASS.budget(Some(64.0), None);
+        assert_eq!(budget, (Some(16), None));
+        let pass = render_direct(cornell(), &params(), budget, seed, &NoProgress, &cancel);
+        assert_eq!(pass.spp, 16);
         add_into(&mut image, &pass.image);
     }
     assert_finite_non_negative(&image, "direct pass replicate");

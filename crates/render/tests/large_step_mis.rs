@@ -22,10 +22,10 @@ use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
 use common::stats::{against_reference, assert_finite_non_negative, mean_se, t_critical};
-use common::{analytic_enclosure, enclosure_radiance};
+use common::{analytic_enclosure, bdpt_replicates, enclosure_radiance};
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
-use render::bdpt::{render_bdpt, BdptParams};
+use render::bdpt::BdptParams;
 use render::image::Image;
 use render::mlt::{
     render_mlt_with_estimator, LargeStepMode, MltBudget, MltEstimator, MltOutput, MltSettings,
@@ -173,23 +173,7 @@ fn params() -> BdptParams {
 /// `K` independent BDPT renders of the Cornell box at depth 5, 256 spp.
 fn reference() -> &'static [Image] {
     static REFERENCE: OnceLock<Vec<Image>> = OnceLock::new();
-    REFERENCE.get_or_init(|| {
-        (0..K as u64)
-            .map(|k| {
-                let out = render_bdpt(
-                    cornell(),
-                    &params(),
-                    Some(256),
-                    None,
-                    93_000 + k,
-                    false,
-                    &NoProgress,
-                    &AtomicBool::new(false),
-                );
-                out.image
-            })
-            .collect()
-    })
+    REFERENCE.get_or_init(|| bdpt_replicates(cornell(), &params(), 256, K, 93_000))
 }
 
 fn cornell_case(method: Method, seed0: u64, mpp: f64, large_step: LargeStepMode) {

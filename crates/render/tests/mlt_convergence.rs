@@ -41,12 +41,14 @@ use std::sync::OnceLock;
 use common::stats::{
     assert_finite_non_negative, block_t, mean_se, relmse_observed_and_expected, rounded, t_critical,
 };
-use common::{analytic_enclosure, enclosure_radiance, ENCLOSURE_ALBEDO, ENCLOSURE_LE};
+use common::{
+    analytic_enclosure, bdpt_replicates, enclosure_radiance, ENCLOSURE_ALBEDO, ENCLOSURE_LE,
+};
 use glam::{Mat4, Vec3, Vec3A};
 use mcmc_core::render_loop::ChainSlot;
 use mcmc_core::{Mh, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
-use render::bdpt::{render_bdpt, BdptParams};
+use render::bdpt::BdptParams;
 use render::image::Image;
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::mala::{self, MalaConfig, MalaVariant};
@@ -371,23 +373,7 @@ fn reference() -> &'static [Image] {
             max_depth: CORNELL_DEPTH,
             ..BdptParams::default()
         };
-        (0..K as u64)
-            .map(|k| {
-                let out = render_bdpt(
-                    cornell(),
-                    &params,
-                    Some(REF_SPP),
-                    None,
-                    90_000 + k,
-                    false,
-                    &NoProgress,
-                    &AtomicBool::new(false),
-                );
-                assert_eq!(out.dropped, 0);
-                assert_finite_non_negative(&out.image, "BDPT reference");
-                out.image
-            })
-            .collect()
+        bdpt_replicates(cornell(), &params, REF_SPP, K, 90_000)
     })
 }
 

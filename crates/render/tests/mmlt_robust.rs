@@ -24,11 +24,11 @@ use common::stats::{
     against_reference, assert_finite_non_negative, block_t, mean_se, relmse_observed_and_expected,
     t_critical,
 };
-use common::{analytic_enclosure, enclosure_radiance};
+use common::{analytic_enclosure, bdpt_replicates, enclosure_radiance};
 use mcmc_core::render_loop::ChainAllocation;
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
-use render::bdpt::{render_bdpt, BdptParams};
+use render::bdpt::BdptParams;
 use render::image::Image;
 use render::mlt::{
     mmlt_depth_normalization, render_mlt_normalized, render_mlt_with_estimator, LargeStepMode,
@@ -76,23 +76,7 @@ fn cornell() -> &'static Scene {
 
 fn reference() -> &'static [Image] {
     static REFERENCE: OnceLock<Vec<Image>> = OnceLock::new();
-    REFERENCE.get_or_init(|| {
-        (0..K as u64)
-            .map(|k| {
-                render_bdpt(
-                    cornell(),
-                    &params(),
-                    Some(REF_SPP),
-                    None,
-                    190_000 + k,
-                    false,
-                    &NoProgress,
-                    &AtomicBool::new(false),
-                )
-                .image
-            })
-            .collect()
-    })
+    REFERENCE.get_or_init(|| bdpt_replicates(cornell(), &params(), REF_SPP, K, 190_000))
 }
 
 fn mmlt(scene: &Scene, seed: u64, chains: usize, estimator: MltEstimator) -> MltOutput {

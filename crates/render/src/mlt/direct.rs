@@ -6,8 +6,8 @@
 //! per-pixel estimator with next-event estimation renders it with far less noise per unit of
 //! time than a Markov chain, which spends its mutations in proportion to brightness and so
 //! mostly on exactly these paths. With the pass on, the chains sample only depths >= 2
-//! ([`super::PssmltTarget::with_min_depth`]; MMLT: only the targets of depth >= 2) and the
-//! pass adds a BDPT render of depths 0 and 1 at [`DirectPass::samples_per_pixel`].
+//! ([`super::PssmltTarget::with_min_depth`]) and the pass adds a BDPT render of depths 0 and 1
+//! whose budget follows [`DirectPass`] (by default in proportion to the chains').
 //!
 //! Unbiasedness: BDPT's MIS weights of a path are computed over the strategies of that path's
 //! own depth (`s + t = depth + 2`), never over other depths, so BDPT at maximum depth 1
@@ -33,33 +33,72 @@ use mcmc_core::Progress;
 /// Paths up to this depth (bounces) are the direct pass's; the chains take the deeper ones.
 pub const DIRECT_MAX_DEPTH: u32 = 1;
 
+/// Under a time budget `T`, a [`DirectPass::Fixed`] pass stops after this share of `T` even if
+/// it has not reached its samples per pixel (it always completes one pass), so a large count
+/// cannot starve the chains.
+pub const DIRECT_TIME_SHARE: f64 = 0.25;
+
 /// The direct-lighting pass's settings.
 ///
 /// ```
 /// use render::mlt::direct::DirectPass;
-/// let pass = DirectPass { samples_per_pixel: 16 };
+/// use std::time::Duration;
+/// let pass = DirectPass::PSSMLT_DEFAULT;
 /// assert!(pass.applies_to(5));
 /// assert!(!pass.applies_to(1)); // nothing deeper than depth 1 is left for the chains
-/// assert!(!DirectPass::OFF.applies_to(5));
+/// // 64 mutations per pixel: 32 direct samples per pixel; 10 s: one second of direct pass.
+/// assert_eq!(pass.budget(Some(64.0), None), (Some(32), None));
+/// assert_eq!(pass.budget(None, Some(Duration::from_secs(10))), (None, Some(Duration::from_secs(1))));
+/// assert!(!DirectPass::Off.applies_to(5));
 /// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct DirectPass {
-    /// BDPT samples per pixel of the depth-0 and depth-1 image (0: no separate pass, the
-    /// chains sample every depth). Mitsuba 0.6's PSSMLT default is 16.
-    pub samples_per_pixel: u32,
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DirectPass {
+    /// No separate pass: the chains sample every depth.
+    Off,
+    /// A fixed number of BDPT samples per pixel (`--direct-samples N`; Mitsuba 0.6's
+    /// `directSamples`, whose default is 16); under a time budget at most
+    /// [`DIRECT_TIME_SHARE`] of it.
+    Fixed(u32),
+    /// In proportion to the render's budget, so the pass's error shrinks with the chains':
+    /// `ceil(per_mutation * M)` samples per pixel under a budget of `M` mutations per pixel,
+    /// `time_share` of the time under a time budget (at least one pass either way).
+    Proportional {
+        /// Direct samples per pixel per chain mutation per pixel.
+        per_mutation: f64,
+        /// Share of a time budget.
+        time_share: f64,
+    },
 }
 
 impl DirectPass {
-    /// No separate pass.
-    pub const OFF: Self = Self {
-        samples_per_pixel: 0,
+    /// PSSMLT's default (`render::session::direct_pass_default`): half a direct sample per
+    /// mutation, a tenth of a time budget. Measured (docs/performance.md, "Direct-lighting
+    /// pass (issue 17, item 2)"): at 10 s on 128 x 128 images 64 samples per pixel took
+    /// 0.8-1.2 s, about a tenth, and about 0.5 per mutation of the ~110 per pixel made; a
+    /// fixed count is a noise floor that longer renders cannot get below.
+    pub const PSSMLT_DEFAULT: Self = Self::Proportional {
+        per_mutation: 0.5,
+        time_share: 0.1,
     };
+
+    /// Whether there is a pass at all.
+    #[must_use]
+    pub fn is_on(&self) -> bool {
+        match *self {
+            DirectPass::Off | DirectPass::Fixed(0) => false,
+            DirectPass::Fixed(_) => true,
+            DirectPass::Proportional {
+                per_mutation,
+                time_share,
+            } => per_mutation > 0.0 && time_share > 0.0,
+        }
+    }
 
     /// Whether the pass is used at maximum path depth `max_depth`: on, and the chains have
     /// depths beyond [`DIRECT_MAX_DEPTH`] left to sample.
     #[must_use]
     pub fn applies_to(&self, max_depth: u32) -> bool {
-        self.samples_per_pixel > 0 && max_depth > DIRECT_MAX_DEPTH
+        self.is_on() && max_depth > DIRECT_MAX_DEPTH
     }
 
     /// The smallest depth the chains sample: `DIRECT_MAX_DEPTH + 1` when the pass applies
@@ -72,32 +111,52 @@ impl DirectPass {
             0
         }
     }
+
+    /// The pass's own budget `(samples per pixel, time)` for a render of
+    /// `mutations_per_pixel` chain mutations per pixel or of `time` (one of the two).
+    #[must_use]
+    pub fn budget(
+        &self,
+        mutations_per_pixel: Option<f64>,
+        time: Option<Duration>,
+    ) -> (Option<u32>, Option<Duration>) {
+        match *self {
+            DirectPass::Off => (Some(0), None),
+            DirectPass::Fixed(n) => (Some(n), time.map(|t| t.mul_f64(DIRECT_TIME_SHARE))),
+            DirectPass::Proportional {
+                per_mutation,
+                time_share,
+            } => match (mutations_per_pixel, time) {
+                (Some(m), _) => {
+                    let n = (per_mutation * m).ceil().clamp(1.0, f64::from(u32::MAX));
+                    (Some(n as u32), None)
+                }
+                (None, Some(t)) => (None, Some(t.mul_f64(time_share.clamp(0.0, 1.0)))),
+                (None, None) => (Some(1), None),
+            },
+        }
+    }
 }
 
 impl Default for DirectPass {
     /// Off.
     fn default() -> Self {
-        Self::OFF
+        Self::Off
     }
 }
 
-/// Under a time budget `T`, the direct pass stops after `DIRECT_TIME_SHARE * T` even if it
-/// has not reached its samples per pixel (it always completes one pass), so a large
-/// `samples_per_pixel` cannot starve the chains.
-pub const DIRECT_TIME_SHARE: f64 = 0.25;
-
 /// Renders the direct pass: BDPT at maximum depth [`DIRECT_MAX_DEPTH`] (the other
-/// parameters, roulette included, from `params`), `pass.samples_per_pixel` samples per pixel,
-/// on the camera's image size, stopping early after `time` if given (every pixel is the mean
-/// of its own samples, so a shortened pass stays unbiased). The seed is mixed so the pass
-/// draws other numbers than a BDPT render of the same seed (not needed for unbiasedness, only
-/// for independence from anything else the caller renders with `seed`).
+/// parameters, roulette included, from `params`) on the camera's image size, `spp` samples per
+/// pixel or until `time` has passed (at least one pass; every pixel is the mean of its own
+/// samples, so a pass stopped by time stays unbiased) — [`DirectPass::budget`] gives both. The
+/// seed is mixed so the pass draws other numbers than a BDPT render of the same seed (not
+/// needed for unbiasedness, only for independence from anything else the caller renders with
+/// `seed`).
 pub fn render_direct(
     scene: &Scene,
     params: &BdptParams,
-    pass: DirectPass,
+    (spp, time): (Option<u32>, Option<Duration>),
     seed: u64,
-    time: Option<Duration>,
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> BdptOutput {
@@ -108,7 +167,7 @@ pub fn render_direct(
     render_bdpt(
         scene,
         &direct,
-        Some(pass.samples_per_pixel.max(1)),
+        spp.map(|n| n.max(1)),
         time,
         seed ^ 0xD1EC_7000_0000_0001,
         false,
@@ -139,13 +198,22 @@ mod tests {
     use super::*;
 
     #[test]
-    fn min_depth_follows_the_pass() {
-        let on = DirectPass {
-            samples_per_pixel: 4,
-        };
-        assert_eq!(on.chain_min_depth(5), 2);
-        assert_eq!(on.chain_min_depth(1), 0);
-        assert_eq!(DirectPass::OFF.chain_min_depth(5), 0);
+    fn min_depth_and_budget_follow_the_pass() {
+        let fixed = DirectPass::Fixed(4);
+        assert_eq!(fixed.chain_min_depth(5), 2);
+        assert_eq!(fixed.chain_min_depth(1), 0);
+        assert_eq!(DirectPass::Off.chain_min_depth(5), 0);
+        assert_eq!(DirectPass::Fixed(0).chain_min_depth(5), 0);
+        let t = Duration::from_secs(8);
+        assert_eq!(
+            fixed.budget(None, Some(t)),
+            (Some(4), Some(Duration::from_secs(2)))
+        );
+        assert_eq!(fixed.budget(Some(100.0), None), (Some(4), None));
+        let p = DirectPass::PSSMLT_DEFAULT;
+        assert_eq!(p.budget(Some(3.0), None), (Some(2), None));
+        assert_eq!(p.budget(Some(0.01), None), (Some(1), None));
+        assert_eq!(p.budget(None, Some(t)), (None, Some(t.mul_f64(0.1))));
     }
 
     #[test]

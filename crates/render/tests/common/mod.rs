@@ -69,3 +69,33 @@ pub fn mean_and_se(pixels: &[[f32; 3]]) -> (f64, f64) {
         / (n - 1.0);
     (mean, (var / n).sqrt())
 }
+
+/// `k` independent BDPT renders of `scene` (seeds `seed0 .. seed0 + k`, `spp` samples per
+/// pixel each, one thread's worth of work each): the replicate reference the MCMC convergence
+/// tests compare against (`stats::against_reference`). Every render is checked finite and
+/// non-negative with nothing dropped.
+pub fn bdpt_replicates(
+    scene: &Scene,
+    params: &render::bdpt::BdptParams,
+    spp: u32,
+    k: usize,
+    seed0: u64,
+) -> Vec<render::image::Image> {
+    (0..k as u64)
+        .map(|i| {
+            let out = render::bdpt::render_bdpt(
+                scene,
+                params,
+                Some(spp),
+                None,
+                seed0 + i,
+                false,
+                &render::session::NoProgress,
+                &std::sync::atomic::AtomicBool::new(false),
+            );
+            assert_eq!(out.dropped, 0, "BDPT reference replicate {i}");
+            stats::assert_finite_non_negative(&out.image, "BDPT reference");
+            out.image
+        })
+        .collect()
+}
