@@ -755,13 +755,16 @@ fn emissive_wall(dir: &Path, strength: &str) -> PathBuf {
 }
 
 /// Renders `scene` with PSSMLT at 8 x 8, 64 mutations per pixel (every pixel is visited); returns the image and the
-/// summary's non-finite count.
+/// summary's non-finite count. The direct-lighting pass is off: the emitter seen directly
+/// (depth 0) must go through the chains' splats, the path under test.
 fn pssmlt_render(scene: &Path, out: &Path) -> (Image, u64) {
     let output = chainlight(&[
         "render",
         path_str(scene),
         "--integrator",
         "pssmlt",
+        "--direct-samples",
+        "0",
         "--width",
         "8",
         "--height",
