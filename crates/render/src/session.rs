@@ -699,6 +699,12 @@ fn render_bidirectional(
     let mut image = out.image;
     let (mut dropped, mut cancelled) = (out.dropped + out.non_finite, out.cancelled);
     if let Some((pass, _)) = &direct {
+        if out.mutations == 0 {
+            notes.push(
+                "cancelled before the chains ran: the image holds only the direct-lighting pass (path depths 0-1)"
+                    .to_owned(),
+            );
+        }
         mlt::direct::add_into(&mut image, &pass.image);
         dropped += pass.dropped;
         cancelled |= pass.cancelled;

@@ -70,8 +70,17 @@ fn cancelled_render(scene: &Scene, integrator: IntegratorKind) -> (RenderOutput,
     } else {
         1
     };
+    // PSSMLT's direct-lighting pass (on by default) renders before the bootstrap and reports
+    // its pixel samples as progress too.
+    let direct_units = if integrator == IntegratorKind::Pssmlt {
+        let pass = render::session::direct_pass_default(integrator);
+        let (spp, _) = pass.budget(Some(1_000_000.0), None);
+        u64::from(spp.unwrap_or(0)) * u64::from(SIZE * SIZE)
+    } else {
+        0
+    };
     let warm_up = if integrator.is_mcmc() {
-        settings.mcmc.bootstrap_samples as u64 * targets
+        settings.mcmc.bootstrap_samples as u64 * targets + direct_units
     } else {
         0
     };
