@@ -216,6 +216,7 @@ impl Method {
             mcmc,
             strategy_images: false,
             roulette: None,
+            sampler: None,
         }
     }
 }

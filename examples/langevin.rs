@@ -193,6 +193,7 @@ fn settings(method: usize, size: u32, budget: Budget, seed: u64) -> RenderSettin
         mcmc,
         strategy_images: false,
         roulette: None,
+        sampler: None,
     }
 }
 

@@ -385,6 +385,7 @@ impl Method {
             },
             strategy_images: false,
             roulette: None,
+            sampler: None,
         }
     }
 }

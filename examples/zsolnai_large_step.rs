@@ -200,6 +200,7 @@ fn main() {
                 },
                 strategy_images: false,
                 roulette: None,
+                sampler: None,
             };
             let start = std::time::Instant::now();
             let out =

@@ -132,6 +132,10 @@ pub(crate) struct RenderArgs {
     /// bounce)) [default: 3]. MMLT-based integrators never use roulette; pt keeps pbrt-v4's.
     #[arg(long, value_name = "off|N", value_parser = parse::roulette)]
     roulette: Option<render::bdpt::Roulette>,
+    /// pt and bdpt: the per-pixel sampler, `independent` or `sobol` (Owen-scrambled Sobol
+    /// points, stratified per pixel) [default: independent]. Other integrators own their numbers.
+    #[arg(long, value_name = "independent|sobol")]
+    sampler: Option<render::sampler::SamplerKind>,
     /// BDPT only: also write the MIS-weighted image of every strategy (s, t) next to the
     /// output, as `<stem>_s<S>_t<T>.exr`.
     #[arg(long)]
@@ -313,6 +317,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
         },
         strategy_images: args.strategy_images,
         roulette: args.roulette,
+        sampler: args.sampler,
     }
 }
 

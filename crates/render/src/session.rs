@@ -13,6 +13,7 @@ use crate::integrator::pt_driver::{self, PtSettings};
 use crate::mlt::{
     self, LargeStepMode, MltBudget, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS,
 };
+use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
@@ -147,6 +148,22 @@ pub const fn direct_pass_default(integrator: IntegratorKind) -> crate::mlt::dire
     }
 }
 
+/// The per-pixel sampler `integrator` uses by default ([`RenderSettings::sampler`]):
+/// independent numbers for every integrator (docs/performance.md, "Owen-scrambled Sobol
+/// sampler for PT and BDPT (issue 17, item 2)", has the equal-time measurements).
+#[must_use]
+pub const fn sampler_default(integrator: IntegratorKind) -> SamplerKind {
+    let _ = integrator;
+    SamplerKind::Independent
+}
+
+/// Whether `integrator` takes a [`RenderSettings::sampler`] (PT and BDPT; the Halton, MCMC
+/// and LQMC integrators own their numbers).
+#[must_use]
+pub const fn takes_sampler(integrator: IntegratorKind) -> bool {
+    matches!(integrator, IntegratorKind::Pt | IntegratorKind::Bdpt)
+}
+
 /// Default mutations per chain in the estimation phase of automatic large-step control.
 pub const AUTO_LARGE_STEP_ESTIMATION: u64 = 1_000;
 
@@ -180,6 +197,9 @@ pub struct RenderSettings {
     /// keeps its own (pbrt-v4's, [`crate::integrator::pt::ROULETTE_DEPTH`]).
     /// docs/performance.md, "Equal-time efficiency (issue 17)", has the measurements.
     pub roulette: Option<bdpt::Roulette>,
+    /// PT and BDPT: the per-pixel sampler; `None` (default) is [`sampler_default`]. Other
+    /// integrators reject `Some` ([`validate`]).
+    pub sampler: Option<SamplerKind>,
 }
 
 impl Default for RenderSettings {
@@ -196,6 +216,7 @@ impl Default for RenderSettings {
             mcmc: McmcSettings::default(),
             strategy_images: false,
             roulette: None,
+            sampler: None,
         }
     }
 }
@@ -270,6 +291,15 @@ pub fn validate(settings: &RenderSettings) -> Result<(), RenderError> {
             settings.max_depth,
             "0..=65536",
         ));
+    }
+    if let Some(kind) = settings.sampler {
+        if !takes_sampler(settings.integrator) {
+            return Err(RenderError::setting(
+                "sampler",
+                kind,
+                "independent or sobol with --integrator pt or bdpt only",
+            ));
+        }
     }
     match settings.budget {
         Budget::SamplesPerPixel(0) => Err(RenderError::setting("spp", 0, ">= 1")),
@@ -384,6 +414,9 @@ fn render_pt(
         max_depth: settings.max_depth,
         budget: settings.budget,
         seed: settings.seed,
+        sampler: settings
+            .sampler
+            .unwrap_or(sampler_default(settings.integrator)),
     };
     let out = if settings.integrator == IntegratorKind::Qmc {
         crate::integrator::qmc::render_qmc(scene, &pt_settings, progress, cancel)
@@ -423,9 +456,12 @@ fn render_bdpt(
         Budget::SamplesPerPixel(n) => (Some(n), None),
         Budget::Time(t) => (None, Some(t)),
     };
-    let out = bdpt::render_bdpt(
+    let out = bdpt::render_bdpt_sampled(
         scene,
         &params,
+        settings
+            .sampler
+            .unwrap_or(sampler_default(settings.integrator)),
         spp,
         time,
         settings.seed,

@@ -96,6 +96,7 @@ fn pt_settings(scene: &Scene, spp: u32, max_depth: u32, seed: u64) -> PtSettings
         max_depth,
         budget: Budget::SamplesPerPixel(spp),
         seed,
+        sampler: render::sampler::SamplerKind::Independent,
     }
 }
 

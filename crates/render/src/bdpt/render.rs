@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use super::{sample, BdptParams, BdptScratch, SceneRef, StrategySplat, MAX_VERTICES};
 use crate::film::{pixel_sample_position, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
-use crate::sampler::{IndependentSampler, Sampler};
+use crate::sampler::{IndependentSampler, PixelSampler, Sampler, SamplerKind, SobolSampler};
 
 /// Number of fixed row bands (work units): the image does not depend on the thread count.
 const BANDS: usize = 8;
@@ -100,6 +100,7 @@ struct Pass<'a> {
     params: &'a BdptParams,
     strategies: &'a Strategies,
     seed: u64,
+    sampler: SamplerKind,
     index: u32,
     /// Rows not started by then are skipped (time budgets, after the first pass).
     deadline: Option<Instant>,
@@ -111,8 +112,15 @@ impl Band {
     /// Takes sample `pass.index` of every pixel of the band in row-major order; returns false
     /// if `cancel` (checked before every pixel) or the deadline (before every row) stopped it.
     fn render(&mut self, pass: &Pass<'_>) -> bool {
+        match pass.sampler {
+            SamplerKind::Independent => self.render_with(pass, IndependentSampler::new(pass.seed)),
+            SamplerKind::Sobol => self.render_with(pass, SobolSampler::new(pass.seed)),
+        }
+    }
+
+    /// [`Band::render`] with `sampler`.
+    fn render_with<S: PixelSampler>(&mut self, pass: &Pass<'_>, mut sampler: S) -> bool {
         let w = self.light.width();
-        let mut sampler = IndependentSampler::new(pass.seed);
         for y in self.rows.clone() {
             if pass.deadline.is_some_and(|d| Instant::now() >= d) {
                 return false;
@@ -133,7 +141,7 @@ impl Band {
     }
 
     /// One BDPT sample through `p_raster`.
-    fn sample(&mut self, pass: &Pass<'_>, sampler: &mut IndependentSampler, p_raster: Vec2) {
+    fn sample<S: Sampler>(&mut self, pass: &Pass<'_>, sampler: &mut S, p_raster: Vec2) {
         let Band {
             camera,
             light,
@@ -207,6 +215,35 @@ pub fn render_bdpt(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> BdptOutput {
+    render_bdpt_sampled(
+        scene,
+        params,
+        SamplerKind::Independent,
+        spp,
+        time,
+        seed,
+        strategy_images,
+        progress,
+        cancel,
+    )
+}
+
+/// [`render_bdpt`] drawing every pixel sample's numbers from the per-pixel sampler `sampler`
+/// (e.g. [`SamplerKind::Sobol`]: the camera, light and connection streams of a pixel's
+/// samples are each stratified draw by draw; light-tracing splats land anywhere, and stay
+/// unbiased because every sample is uniform on its own).
+#[allow(clippy::too_many_arguments)]
+pub fn render_bdpt_sampled(
+    scene: SceneRef<'_>,
+    params: &BdptParams,
+    sampler: SamplerKind,
+    spp: Option<u32>,
+    time: Option<Duration>,
+    seed: u64,
+    strategy_images: bool,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> BdptOutput {
     let start = Instant::now();
     let (w, h) = (
         scene.camera().width() as usize,
@@ -253,6 +290,7 @@ pub fn render_bdpt(
             params,
             strategies: &strategies,
             seed,
+            sampler,
             index: done,
             deadline: time.filter(|_| done > 0).map(|t| start + t),
             progress,

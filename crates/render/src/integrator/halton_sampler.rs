@@ -6,7 +6,7 @@ use glam::Vec2;
 use lqmc::{Halton, Scrambling};
 use mcmc_core::seed::mix64;
 
-use crate::sampler::{unit_f32, Sampler, Stream};
+use crate::sampler::{unit_f32, PixelSampler, Sampler, Stream};
 
 /// Dimensions of [`Stream::Light`] and [`Stream::Connection`] start here in the Halton
 /// sampler, beyond the Halton dimensions (they use its hash PRNG); the path tracers draw from
@@ -81,6 +81,13 @@ impl HaltonSampler {
         self.index = sample_index;
         self.stream = 0;
         self.dimension = [0; 3];
+    }
+}
+
+impl PixelSampler for HaltonSampler {
+    #[inline]
+    fn start_pixel_sample(&mut self, pixel_index: u64, sample_index: u64) {
+        HaltonSampler::start_pixel_sample(self, pixel_index, sample_index);
     }
 }
 

@@ -12,7 +12,7 @@ use super::pt;
 use crate::budget::Budget;
 use crate::film::{tiles, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
-use crate::sampler::{IndependentSampler, Sampler};
+use crate::sampler::{IndependentSampler, Sampler, SamplerKind, SobolSampler};
 use crate::scene::Scene;
 
 /// Edge length of the square tiles that are the work units of a render (and its merge order).
@@ -35,6 +35,8 @@ pub struct PtSettings {
     pub budget: Budget,
     /// Master seed of every random number.
     pub seed: u64,
+    /// The per-pixel sampler of [`render_pt`] (the Halton integrators bring their own).
+    pub sampler: SamplerKind,
 }
 
 /// The result of [`render_pt`].
@@ -54,7 +56,8 @@ pub struct PtOutput {
 /// on the current rayon pool.
 ///
 /// The film is split into [`TILE_SIZE`] tiles (the work units), rendered in passes and merged
-/// in tile order, with a box filter of one pixel. Every random number is keyed by (seed,
+/// in tile order, with a box filter of one pixel. `settings.sampler` picks independent numbers
+/// or Owen-scrambled Sobol points per pixel. Every random number is keyed by (seed,
 /// pixel, sample index, dimension) and a tile takes its samples in sample-index order, so
 /// under [`Budget::SamplesPerPixel`] the image is bit-identical for any thread count.
 ///
@@ -77,14 +80,24 @@ pub fn render_pt(
     cancel: &AtomicBool,
 ) -> PtOutput {
     let seed = settings.seed;
-    render_pixel_samples(
-        scene,
-        settings,
-        progress,
-        cancel,
-        || IndependentSampler::new(seed),
-        |sampler, pixel, sample| sampler.start_pixel_sample(pixel, sample),
-    )
+    match settings.sampler {
+        SamplerKind::Independent => render_pixel_samples(
+            scene,
+            settings,
+            progress,
+            cancel,
+            || IndependentSampler::new(seed),
+            |s, pixel, sample| s.start_pixel_sample(pixel, sample),
+        ),
+        SamplerKind::Sobol => render_pixel_samples(
+            scene,
+            settings,
+            progress,
+            cancel,
+            || SobolSampler::new(seed),
+            |s, pixel, sample| s.start_pixel_sample(pixel, sample),
+        ),
+    }
 }
 
 /// [`render_pt`] with any per-pixel sampler: `new_sampler()` makes one sampler per work unit
@@ -261,6 +274,7 @@ mod tests {
             max_depth: 3,
             budget: Budget::SamplesPerPixel(spp),
             seed: 1,
+            sampler: SamplerKind::Independent,
         }
     }
 

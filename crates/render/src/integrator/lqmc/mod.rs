@@ -337,6 +337,7 @@ pub(crate) fn render_session(
         max_depth: settings.max_depth,
         budget: settings.budget,
         seed: settings.seed,
+        sampler: crate::sampler::SamplerKind::Independent,
     };
     let out = render_lqmc(scene, &pt, &LqmcParams::tessari2020(), progress, cancel);
     let mut notes = scene.notes.clone();
@@ -380,6 +381,7 @@ mod tests {
             max_depth: 3,
             budget: Budget::SamplesPerPixel(2),
             seed: 1,
+            sampler: crate::sampler::SamplerKind::Independent,
         };
         let out = render_lqmc(
             &scene,

@@ -1,13 +1,20 @@
-//! The sampler interface every integrator draws its random numbers from, and the counter-based
-//! independent sampler used by PT.
+//! The sampler interface every integrator draws its random numbers from, the counter-based
+//! independent sampler, and the Owen-scrambled Sobol sampler ([`sobol`]) PT and BDPT can use
+//! instead ([`SamplerKind`]).
 //!
 //! An integrator is a deterministic function of the numbers it draws (pbrt's separation), so the
 //! same path construction code runs under [`IndependentSampler`] and under primary-sample-space
 //! Markov chains. Numbers are drawn in *streams* ([`Stream`]): a PSS sampler keeps them apart so
 //! that, e.g., mutating the camera subpath does not shift the light subpath's numbers.
 
+use std::fmt;
+use std::str::FromStr;
+
 use glam::Vec2;
 use mcmc_core::seed::mix64;
+
+pub mod sobol;
+pub use sobol::SobolSampler;
 
 /// A stream of primary samples. Bidirectional integrators draw camera-subpath numbers from
 /// [`Stream::Camera`], light-subpath numbers from [`Stream::Light`] and connection / strategy
@@ -64,6 +71,60 @@ impl<S: Sampler + ?Sized> Sampler for &mut S {
     #[inline]
     fn next_2d(&mut self) -> Vec2 {
         (**self).next_2d()
+    }
+}
+
+/// A sampler that draws the numbers of one pixel sample at a time: the per-pixel samplers of
+/// PT and BDPT ([`IndependentSampler`], [`SobolSampler`], the Halton samplers).
+pub trait PixelSampler: Sampler {
+    /// Starts sample `sample_index` of pixel `pixel_index` (e.g. `y * width + x`): resets every
+    /// stream to its first number and selects [`Stream::Camera`].
+    fn start_pixel_sample(&mut self, pixel_index: u64, sample_index: u64);
+}
+
+/// Which per-pixel sampler PT and BDPT draw from (`--sampler`).
+///
+/// ```
+/// use render::sampler::SamplerKind;
+/// assert_eq!("sobol".parse::<SamplerKind>(), Ok(SamplerKind::Sobol));
+/// assert_eq!(SamplerKind::default(), SamplerKind::Independent);
+/// assert!("halton".parse::<SamplerKind>().is_err());
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SamplerKind {
+    /// [`IndependentSampler`]: independent uniform numbers (the default).
+    #[default]
+    Independent,
+    /// [`SobolSampler`]: Owen-scrambled Sobol points, stratified per pixel and per draw.
+    Sobol,
+}
+
+impl SamplerKind {
+    /// The command-line names, in order.
+    pub const NAMES: [&'static str; 2] = ["independent", "sobol"];
+}
+
+impl fmt::Display for SamplerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            SamplerKind::Independent => "independent",
+            SamplerKind::Sobol => "sobol",
+        })
+    }
+}
+
+impl FromStr for SamplerKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "independent" => Ok(SamplerKind::Independent),
+            "sobol" => Ok(SamplerKind::Sobol),
+            _ => Err(format!(
+                "unknown sampler '{s}' (allowed: {})",
+                SamplerKind::NAMES.join(", ")
+            )),
+        }
     }
 }
 
@@ -133,6 +194,13 @@ impl IndependentSampler {
         self.dimension[self.stream] = d + 1;
         let key = ((self.stream as u64) << 56) ^ d;
         mix64(self.sample_key ^ mix64(key.wrapping_add(0x632b_e59b_d9b4_e019)))
+    }
+}
+
+impl PixelSampler for IndependentSampler {
+    #[inline]
+    fn start_pixel_sample(&mut self, pixel_index: u64, sample_index: u64) {
+        IndependentSampler::start_pixel_sample(self, pixel_index, sample_index);
     }
 }
 

@@ -1,0 +1,247 @@
+//! PT and BDPT with the Owen-scrambled Sobol sampler (`--sampler sobol`) converge to the
+//! independent-sample BDPT reference on the Cornell box and the glass Cornell box (image mean,
+//! 4 x 4 block means, relMSE against its expectation); a negative control (Sobol PT one bounce
+//! short) fails the same test; same seed on 1 and 2 threads is bit-identical; the sampler is an
+//! error for integrators that own their numbers.
+//!
+//! # Statistics
+//!
+//! `R` replicates per estimate with master seeds `seed0 + r` (independent scramblings). The
+//! pixels of one Sobol image are independent of each other (each pixel is scrambled with its
+//! own keys) but a pixel's samples are not, so standard errors come from the replicates
+//! (`common::stats::against_reference`: Welch t per statistic). Bonferroni over
+//! `N_COMPARISONS` at family-wise `ALPHA_FAMILY`, Student-t critical values with `R - 1`
+//! degrees of freedom (conservative).
+
+mod common;
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::sync::OnceLock;
+
+use common::stats::{against_reference, block_t, mean_se, t_critical};
+use render::bdpt::{render_bdpt_sampled, BdptParams};
+use render::budget::Budget;
+use render::error::RenderError;
+use render::image::Image;
+use render::sampler::SamplerKind;
+use render::scene::Scene;
+use render::session::{render, IntegratorKind, NoProgress, RenderSettings};
+
+/// Family-wise false-alarm probability of the null-hypothesis comparisons.
+const ALPHA_FAMILY: f64 = 0.001;
+/// Replicates per estimate.
+const R: usize = 16;
+/// Blocks per side.
+const BLOCKS: usize = 4;
+/// Two scenes x two integrators x (image mean + blocks).
+const N_COMPARISONS: usize = 2 * 2 * (1 + BLOCKS * BLOCKS);
+/// Maximum path depth of every render.
+const DEPTH: u32 = 4;
+
+fn critical() -> f64 {
+    t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R - 1) as u32)
+}
+
+fn scene_file(name: &str, size: u32) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name);
+    let mut scene = Scene::load(&path).unwrap();
+    scene.set_resolution(size, size);
+    scene
+}
+
+fn params(max_depth: u32) -> BdptParams {
+    BdptParams {
+        max_depth,
+        ..BdptParams::default()
+    }
+}
+
+fn cornell() -> &'static (Scene, Vec<Image>) {
+    static CELL: OnceLock<(Scene, Vec<Image>)> = OnceLock::new();
+    CELL.get_or_init(|| {
+        let scene = Scene::cornell_box(24, 24);
+        let reference = common::bdpt_replicates(&scene, &params(DEPTH), 16, R, 1000);
+        (scene, reference)
+    })
+}
+
+fn glass() -> &'static (Scene, Vec<Image>) {
+    static CELL: OnceLock<(Scene, Vec<Image>)> = OnceLock::new();
+    CELL.get_or_init(|| {
+        let scene = scene_file("cornell-glass.gltf", 24);
+        let reference = common::bdpt_replicates(&scene, &params(DEPTH), 16, R, 1000);
+        (scene, reference)
+    })
+}
+
+/// `R` Sobol PT renders through the session (seeds `seed0..`), `spp` samples per pixel.
+fn pt_sobol(scene: &Scene, spp: u32, max_depth: u32, seed0: u64) -> Vec<Image> {
+    (0..R as u64)
+        .map(|r| {
+            let settings = RenderSettings {
+                width: scene.camera().width(),
+                height: scene.camera().height(),
+                integrator: IntegratorKind::Pt,
+                budget: Budget::SamplesPerPixel(spp),
+                seed: seed0 + r,
+                max_depth,
+                sampler: Some(SamplerKind::Sobol),
+                ..RenderSettings::default()
+            };
+            let out = render(scene, &settings, &NoProgress, &AtomicBool::new(false)).unwrap();
+            assert_eq!(out.dropped_nonfinite, 0);
+            out.image
+        })
+        .collect()
+}
+
+/// `R` Sobol BDPT renders (seeds `seed0..`), `spp` samples per pixel.
+fn bdpt_sobol(scene: &Scene, spp: u32, seed0: u64) -> Vec<Image> {
+    (0..R as u64)
+        .map(|r| {
+            let out = render_bdpt_sampled(
+                scene,
+                &params(DEPTH),
+                SamplerKind::Sobol,
+                Some(spp),
+                None,
+                seed0 + r,
+                false,
+                &NoProgress,
+                &AtomicBool::new(false),
+            );
+            assert_eq!(out.dropped, 0);
+            out.image
+        })
+        .collect()
+}
+
+#[test]
+fn sobol_pt_and_bdpt_match_bdpt_on_the_cornell_box() {
+    let (scene, reference) = cornell();
+    against_reference(
+        "cornell, pt sobol",
+        &pt_sobol(scene, 16, DEPTH, 21),
+        reference,
+        BLOCKS,
+        critical(),
+    );
+    against_reference(
+        "cornell, bdpt sobol",
+        &bdpt_sobol(scene, 8, 31),
+        reference,
+        BLOCKS,
+        critical(),
+    );
+}
+
+#[test]
+fn sobol_pt_and_bdpt_match_bdpt_on_the_glass_cornell_box() {
+    let (scene, reference) = glass();
+    against_reference(
+        "glass, pt sobol",
+        &pt_sobol(scene, 32, DEPTH, 41),
+        reference,
+        BLOCKS,
+        critical(),
+    );
+    against_reference(
+        "glass, bdpt sobol",
+        &bdpt_sobol(scene, 8, 51),
+        reference,
+        BLOCKS,
+        critical(),
+    );
+}
+
+/// Negative control: Sobol PT one bounce short of the reference's depth misses the light of
+/// the longest paths, and the same statistics detect it.
+#[test]
+fn negative_control_a_render_one_bounce_short_fails() {
+    let (scene, reference) = cornell();
+    let short = pt_sobol(scene, 16, DEPTH - 1, 21);
+    let (m, s) = mean_se(&short.iter().map(Image::mean_luminance).collect::<Vec<_>>());
+    let (mr, sr) = mean_se(
+        &reference
+            .iter()
+            .map(Image::mean_luminance)
+            .collect::<Vec<_>>(),
+    );
+    let t_mean = ((m - mr) / s.hypot(sr)).abs();
+    let t_blocks = block_t(&short, reference, BLOCKS)
+        .iter()
+        .map(|b| b[0].abs())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "pt sobol, depth {}: |t| mean {t_mean:.2}, blocks {t_blocks:.2}",
+        DEPTH - 1
+    );
+    assert!(
+        t_mean.max(t_blocks) > critical(),
+        "a render one bounce short passed"
+    );
+}
+
+fn bits(image: &Image) -> Vec<[u32; 3]> {
+    image.pixels.iter().map(|p| p.map(f32::to_bits)).collect()
+}
+
+#[test]
+fn same_seed_one_and_two_threads_are_bit_identical() {
+    let scene = scene_file("cornell-glass.gltf", 40);
+    for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt] {
+        let run = |threads, seed| {
+            let settings = RenderSettings {
+                width: 40,
+                height: 24,
+                integrator,
+                budget: Budget::SamplesPerPixel(3),
+                threads,
+                seed,
+                max_depth: 5,
+                sampler: Some(SamplerKind::Sobol),
+                ..RenderSettings::default()
+            };
+            bits(
+                &render(&scene, &settings, &NoProgress, &AtomicBool::new(false))
+                    .unwrap()
+                    .image,
+            )
+        };
+        let one = run(1, 5);
+        assert!(one == run(2, 5), "{integrator:?}: 1 and 2 threads differ");
+        // Negative control: another seed changes the bits.
+        assert!(one != run(2, 6), "{integrator:?}: the seed changed nothing");
+    }
+}
+
+#[test]
+fn the_sampler_is_an_error_for_integrators_that_own_their_numbers() {
+    let scene = Scene::cornell_box(8, 8);
+    for integrator in [
+        IntegratorKind::Pssmlt,
+        IntegratorKind::Mmlt,
+        IntegratorKind::Qmc,
+    ] {
+        let settings = RenderSettings {
+            width: 8,
+            height: 8,
+            integrator,
+            sampler: Some(SamplerKind::Sobol),
+            ..RenderSettings::default()
+        };
+        match render(&scene, &settings, &NoProgress, &AtomicBool::new(false)) {
+            Err(
+                e @ RenderError::InvalidSetting {
+                    field: "sampler", ..
+                },
+            ) => {
+                assert!(e.to_string().contains("pt or bdpt"), "{e}");
+            }
+            other => panic!("{integrator:?}: expected a sampler error, got {other:?}"),
+        }
+    }
+}
