@@ -127,9 +127,10 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 100_000,
           value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
     bootstrap_samples: u32,
-    /// bdpt, pssmlt (and drmlt over it): Russian roulette of the subpaths, `off`, or `N` (from
-    /// N bounces on, 0..=1024; continue with probability min(0.95, f cos / pdf of the last
-    /// bounce)) [default: 3]. MMLT-based integrators never use roulette; pt keeps pbrt-v4's.
+    /// pt (and qmc), bdpt, pssmlt (and drmlt over it): Russian roulette, `off`, or `N` (from N
+    /// bounces on, 0..=1024; pt: continue with probability min(1, max beta) after every bounce
+    /// beyond the N-th; bdpt: min(0.95, f cos / pdf of the last bounce)) [default: 5 for pt,
+    /// 3 otherwise]. MMLT-based integrators never use roulette.
     #[arg(long, value_name = "off|N", value_parser = parse::roulette)]
     roulette: Option<render::bdpt::Roulette>,
     /// pt and bdpt: the per-pixel sampler, `independent` or `sobol` (Owen-scrambled Sobol

@@ -162,6 +162,21 @@ pub const fn sampler_default(integrator: IntegratorKind) -> SamplerKind {
     }
 }
 
+/// Russian roulette of the path tracers by default ([`RenderSettings::roulette`] `None`): for
+/// `pt` from bounce 5 on (Mitsuba 3's `rr_depth`; at the usual max depth 5 no roulette at all),
+/// which lowered PT's equal-time relMSE on all three measured scenes, every seed (x0.82
+/// cornell-glass, x0.92 caustic-pool, x0.72 ajar-door; 10 s, 128 x 128, 2 threads, with the
+/// Sobol sampler); `qmc` and `qmc-faure` keep pbrt-v4's [`crate::integrator::pt::ROULETTE_DEPTH`]
+/// (3), as measured in their documentation (docs/performance.md, "PT Russian roulette").
+#[must_use]
+pub const fn pt_roulette_default(integrator: IntegratorKind) -> Option<u32> {
+    if matches!(integrator, IntegratorKind::Pt) {
+        Some(5)
+    } else {
+        Some(crate::integrator::pt::ROULETTE_DEPTH)
+    }
+}
+
 /// Whether `integrator` takes a [`RenderSettings::sampler`] (PT and BDPT; the Halton, MCMC
 /// and LQMC integrators own their numbers).
 #[must_use]
@@ -196,10 +211,12 @@ pub struct RenderSettings {
     pub mcmc: McmcSettings,
     /// BDPT only: also return the MIS-weighted image of every strategy `(s, t)`.
     pub strategy_images: bool,
-    /// Russian roulette of BDPT and of the MCMC samplers whose subpaths use it (`bdpt`,
-    /// `pssmlt`, `drmlt` over PSSMLT): `None` (default) keeps [`BdptParams::default`]'s
-    /// (from 3 bounces on); MMLT-based samplers never use roulette (fixed path length), `pt`
-    /// keeps its own (pbrt-v4's, [`crate::integrator::pt::ROULETTE_DEPTH`]).
+    /// Russian roulette of the path tracers (`pt`, `qmc`, `qmc-faure`: pbrt-v4's rule,
+    /// [`crate::integrator::pt::li_with`]), of BDPT and of the MCMC samplers whose subpaths use
+    /// it (`bdpt`, `pssmlt`, `drmlt` over PSSMLT): `None` (default) keeps each one's default
+    /// ([`pt_roulette_default`]: from bounce 5 for `pt`, 3 for `qmc`; from 3 bounces on for
+    /// BDPT, [`BdptParams::default`]); MMLT-based samplers never use roulette (fixed path
+    /// length).
     /// docs/performance.md, "Equal-time efficiency (issue 17)", has the measurements.
     pub roulette: Option<bdpt::Roulette>,
     /// PT and BDPT: the per-pixel sampler; `None` (default) is [`sampler_default`]. Other
@@ -422,6 +439,9 @@ fn render_pt(
         sampler: settings
             .sampler
             .unwrap_or(sampler_default(settings.integrator)),
+        roulette: settings
+            .roulette
+            .map_or(pt_roulette_default(settings.integrator), |r| r.start),
     };
     let out = if settings.integrator == IntegratorKind::Qmc {
         crate::integrator::qmc::render_qmc(scene, &pt_settings, progress, cancel)

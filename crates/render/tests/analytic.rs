@@ -5,7 +5,8 @@
 //!
 //! # Error bound
 //! With the one-pixel box filter, a pixel value `X_j` is the mean of its `N` samples. Pixels
-//! use disjoint keys of the counter-based sampler, so the `P` pixel values are independent and
+//! use disjoint keys of the counter-based samplers (independent numbers, or Sobol points
+//! scrambled per pixel), so the `P` pixel values are independent and
 //! identically distributed with mean `μ` (every pixel sees the same radiance) and some variance
 //! `σ²`. The image mean `M = Σ X_j / P` then has standard deviation `σ / √P`, and `σ` is
 //! estimated by the sample standard deviation `s` of the pixel values (P = 1024, so the
@@ -17,6 +18,8 @@
 use std::sync::atomic::AtomicBool;
 
 use glam::{Mat4, Vec3, Vec3A};
+use render::bdpt::Roulette;
+use render::sampler::SamplerKind;
 use render::scene::{CameraSpec, Material, Mesh, Scene};
 use render::session::{render, Budget, IntegratorKind, NoProgress, RenderSettings};
 
@@ -45,6 +48,18 @@ fn furnace_box(albedo: Vec3, emission: Vec3) -> Scene {
 
 /// Renders and checks every channel of the image mean against `expected`.
 fn check(scene: &Scene, spp: u32, max_depth: u32, expected: Vec3) {
+    check_with(scene, spp, max_depth, expected, None, None).unwrap();
+}
+
+/// [`check`] with a sampler and a roulette setting; `Err` names the failing channel.
+fn check_with(
+    scene: &Scene,
+    spp: u32,
+    max_depth: u32,
+    expected: Vec3,
+    sampler: Option<SamplerKind>,
+    roulette: Option<Roulette>,
+) -> Result<(), String> {
     let settings = RenderSettings {
         width: SIZE,
         height: SIZE,
@@ -53,6 +68,8 @@ fn check(scene: &Scene, spp: u32, max_depth: u32, expected: Vec3) {
         threads: 2,
         seed: 42,
         max_depth,
+        sampler,
+        roulette,
         ..RenderSettings::default()
     };
     let out = render(scene, &settings, &NoProgress, &AtomicBool::new(false)).unwrap();
@@ -66,11 +83,13 @@ fn check(scene: &Scene, spp: u32, max_depth: u32, expected: Vec3) {
         let mu = f64::from(expected[c]);
         let bound = 5.0 * std_error + 1e-5 * mu;
         println!("channel {c}: mean {mean:.5}, exact {mu:.5}, bound {bound:.5}");
-        assert!(
-            (mean - mu).abs() <= bound,
-            "channel {c}: mean {mean} vs exact {mu} (bound {bound}, std error {std_error})"
-        );
+        if (mean - mu).abs() > bound {
+            return Err(format!(
+                "channel {c}: mean {mean} vs exact {mu} (bound {bound}, std error {std_error})"
+            ));
+        }
     }
+    Ok(())
 }
 
 /// Radiance with at most `depth` bounces: `Le Σ_{k=0..depth} ρ^k`.
@@ -96,6 +115,39 @@ fn direct_lighting_only_is_le_times_one_plus_rho() {
     let scene = furnace_box(rho, le);
     check(&scene, 8, 1, partial_sum(le, rho, 1));
     check(&scene, 8, 3, partial_sum(le, rho, 3));
+}
+
+/// Both samplers, with Russian roulette from bounce 3 (the default), from bounce 1 and off,
+/// converge to the partial sum; the negative control (the partial sum one bounce short)
+/// fails the same check.
+#[test]
+fn both_samplers_with_and_without_roulette_match_the_partial_sum() {
+    let (rho, le) = (Vec3::new(0.7, 0.5, 0.9), Vec3::new(1.0, 2.0, 0.5));
+    let scene = furnace_box(rho, le);
+    let depth = 6;
+    for sampler in [SamplerKind::Independent, SamplerKind::Sobol] {
+        for roulette in [
+            None,
+            Some(Roulette { start: Some(1) }),
+            Some(Roulette { start: None }),
+        ] {
+            println!("{sampler:?}, roulette {roulette:?}");
+            check_with(
+                &scene,
+                8,
+                depth,
+                partial_sum(le, rho, depth),
+                Some(sampler),
+                roulette,
+            )
+            .unwrap_or_else(|e| panic!("{sampler:?}, roulette {roulette:?}: {e}"));
+            let short = partial_sum(le, rho, depth - 1);
+            assert!(
+                check_with(&scene, 8, depth, short, Some(sampler), roulette).is_err(),
+                "{sampler:?}, roulette {roulette:?}: the negative control passed"
+            );
+        }
+    }
 }
 
 #[test]

@@ -19,7 +19,7 @@ use crate::material::TransportMode;
 use crate::sampler::{Sampler, Stream};
 use crate::scene::Scene;
 
-/// Russian roulette starts after this many bounces.
+/// Russian roulette starts after this many bounces (the default of [`li_with`]'s `roulette`).
 pub const ROULETTE_DEPTH: u32 = 3;
 
 /// Radiance arriving along `ray` (towards its origin), estimated by a path of at most
@@ -31,6 +31,23 @@ pub const ROULETTE_DEPTH: u32 = 3;
 /// such samples.
 #[inline]
 pub fn li<S: Sampler + ?Sized>(scene: &Scene, ray: Ray, sampler: &mut S, max_depth: u32) -> Vec3 {
+    li_with(scene, ray, sampler, max_depth, Some(ROULETTE_DEPTH))
+}
+
+/// [`li`] with Russian roulette from bounce `roulette` on: `Some(n)` may end the path after
+/// every bounce beyond the `n`-th, continuing with probability `min(1, max component of beta
+/// * eta_scale)` (pbrt-v4, section 13.4.2: the throughput with the radiance scaling of
+/// refraction undone) and dividing the throughput by it; `None` turns roulette off (the path
+/// ends only at `max_depth`, on a miss or an absorbing bounce). The roulette number is drawn
+/// either way, so the number layout does not depend on the setting.
+#[inline]
+pub fn li_with<S: Sampler + ?Sized>(
+    scene: &Scene,
+    ray: Ray,
+    sampler: &mut S,
+    max_depth: u32,
+    roulette: Option<u32>,
+) -> Vec3 {
     let lights = scene.lights();
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
@@ -130,7 +147,7 @@ pub fn li<S: Sampler + ?Sized>(scene: &Scene, ray: Ray, sampler: &mut S, max_dep
         if !beta.is_finite() || beta.max_element() <= 0.0 {
             break;
         }
-        if depth > ROULETTE_DEPTH {
+        if roulette.is_some_and(|start| depth > start) {
             let q = (1.0 - (beta * eta_scale).max_element()).max(0.0);
             if u_roulette < q {
                 break;
@@ -152,12 +169,32 @@ pub fn sample_pixel<S: Sampler + ?Sized>(
     sampler: &mut S,
     max_depth: u32,
 ) -> (Vec2, Vec3) {
+    sample_pixel_with(
+        scene,
+        camera,
+        pixel,
+        sampler,
+        max_depth,
+        Some(ROULETTE_DEPTH),
+    )
+}
+
+/// [`sample_pixel`] with the Russian roulette setting of [`li_with`].
+#[inline]
+pub fn sample_pixel_with<S: Sampler + ?Sized>(
+    scene: &Scene,
+    camera: &Camera,
+    pixel: UVec2,
+    sampler: &mut S,
+    max_depth: u32,
+    roulette: Option<u32>,
+) -> (Vec2, Vec3) {
     sampler.start_stream(Stream::Camera);
     let p_raster = pixel_sample_position(pixel, sampler.next_2d());
     let u_lens = sampler.next_2d();
     let u_time = sampler.next_1d();
     let ray = camera.generate_ray(p_raster, u_lens, u_time);
-    (p_raster, li(scene, ray, sampler, max_depth))
+    (p_raster, li_with(scene, ray, sampler, max_depth, roulette))
 }
 
 #[cfg(test)]

@@ -37,6 +37,10 @@ pub struct PtSettings {
     pub seed: u64,
     /// The per-pixel sampler of [`render_pt`] (the Halton integrators bring their own).
     pub sampler: SamplerKind,
+    /// Russian roulette of [`render_pt`] and [`render_pixel_samples`] from this bounce on
+    /// ([`pt::li_with`]); `None` turns it off. The usual value is [`pt::ROULETTE_DEPTH`]. (LQMC
+    /// builds its paths itself and ignores it.)
+    pub roulette: Option<u32>,
 }
 
 /// The result of [`render_pt`].
@@ -133,12 +137,13 @@ where
             for y in rect.y0..rect.y1 {
                 for x in rect.x0..rect.x1 {
                     start(&mut sampler, (y * w + x) as u64, u64::from(s));
-                    let (p, l) = pt::sample_pixel(
+                    let (p, l) = pt::sample_pixel_with(
                         scene,
                         &camera,
                         UVec2::new(x as u32, y as u32),
                         &mut sampler,
                         settings.max_depth,
+                        settings.roulette,
                     );
                     tile.add_sample(p, l);
                 }
@@ -275,6 +280,7 @@ mod tests {
             budget: Budget::SamplesPerPixel(spp),
             seed: 1,
             sampler: SamplerKind::Independent,
+            roulette: Some(pt::ROULETTE_DEPTH),
         }
     }
 

@@ -338,6 +338,7 @@ pub(crate) fn render_session(
         budget: settings.budget,
         seed: settings.seed,
         sampler: crate::sampler::SamplerKind::Independent,
+        roulette: Some(crate::integrator::pt::ROULETTE_DEPTH),
     };
     let out = render_lqmc(scene, &pt, &LqmcParams::tessari2020(), progress, cancel);
     let mut notes = scene.notes.clone();
@@ -382,6 +383,7 @@ mod tests {
             budget: Budget::SamplesPerPixel(2),
             seed: 1,
             sampler: crate::sampler::SamplerKind::Independent,
+            roulette: Some(crate::integrator::pt::ROULETTE_DEPTH),
         };
         let out = render_lqmc(
             &scene,
