@@ -35,8 +35,8 @@ pub fn li<S: Sampler + ?Sized>(scene: &Scene, ray: Ray, sampler: &mut S, max_dep
 }
 
 /// [`li`] with Russian roulette from bounce `roulette` on: `Some(n)` may end the path after
-/// every bounce beyond the `n`-th, continuing with probability `min(1, max component of beta
-/// * eta_scale)` (pbrt-v4, section 13.4.2: the throughput with the radiance scaling of
+/// every bounce beyond the `n`-th, continuing with probability `min(1, max component of
+/// beta * eta_scale)` (pbrt-v4, section 13.4.2: the throughput with the radiance scaling of
 /// refraction undone) and dividing the throughput by it; `None` turns roulette off (the path
 /// ends only at `max_depth`, on a miss or an absorbing bounce). The roulette number is drawn
 /// either way, so the number layout does not depend on the setting.
