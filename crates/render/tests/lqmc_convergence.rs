@@ -21,12 +21,11 @@
 
 mod common;
 
-use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
 use common::stats::{assert_finite_non_negative, block_means, mean_se, t_critical};
-use common::{analytic_enclosure, enclosure_radiance};
+use common::{analytic_enclosure, enclosure_radiance, scene_file};
 use lqmc::Scrambling;
 use render::bdpt::{render_bdpt, BdptParams};
 use render::budget::Budget;
@@ -164,15 +163,6 @@ fn bdpt_replicates(scene: &Scene, spp: u32, max_depth: u32) -> Vec<Image> {
             .image
         })
         .collect()
-}
-
-fn scene_file(name: &str, size: u32) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name);
-    let mut scene = Scene::load(&path).unwrap();
-    scene.set_resolution(size, size);
-    scene
 }
 
 const CORNELL_DEPTH: u32 = 4;

@@ -15,10 +15,10 @@
 
 mod common;
 
-use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
+use common::scene_file;
 use common::stats::{against_reference, block_t, mean_se, t_critical};
 use render::bdpt::{render_bdpt_sampled, BdptParams};
 use render::budget::Budget;
@@ -41,15 +41,6 @@ const DEPTH: u32 = 4;
 
 fn critical() -> f64 {
     t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R - 1) as u32)
-}
-
-fn scene_file(name: &str, size: u32) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name);
-    let mut scene = Scene::load(&path).unwrap();
-    scene.set_resolution(size, size);
-    scene
 }
 
 fn params(max_depth: u32) -> BdptParams {

@@ -12,7 +12,7 @@ use super::pt;
 use crate::budget::Budget;
 use crate::film::{tiles, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
-use crate::sampler::{IndependentSampler, Sampler, SamplerKind, SobolSampler};
+use crate::sampler::{IndependentSampler, PixelSampler, Sampler, SamplerKind, SobolSampler};
 use crate::scene::Scene;
 
 /// Edge length of the square tiles that are the work units of a render (and its merge order).

@@ -178,22 +178,13 @@ impl SobolSampler {
     }
 }
 
-impl SobolSampler {
-    /// Starts sample `sample_index` of pixel `pixel_index` (e.g. `y * width + x`): resets every
-    /// stream to its first draw and selects [`Stream::Camera`].
+impl PixelSampler for SobolSampler {
     #[inline]
-    pub fn start_pixel_sample(&mut self, pixel_index: u64, sample_index: u64) {
+    fn start_pixel_sample(&mut self, pixel_index: u64, sample_index: u64) {
         self.pixel_key = mix64(self.seed_key ^ pixel_index.wrapping_mul(0x9e37_79b9_7f4a_7c15));
         self.index = sample_index as u32;
         self.stream = 0;
         self.dimension = [0; 3];
-    }
-}
-
-impl PixelSampler for SobolSampler {
-    #[inline]
-    fn start_pixel_sample(&mut self, pixel_index: u64, sample_index: u64) {
-        SobolSampler::start_pixel_sample(self, pixel_index, sample_index);
     }
 }
 

@@ -4,6 +4,8 @@
 pub mod stats;
 
 use glam::{Vec2, Vec3, Vec3A};
+use std::path::Path;
+
 use render::scene::{CameraSpec, Material, Mesh, Scene};
 
 /// Emitted radiance of the analytic enclosure's walls.
@@ -98,4 +100,14 @@ pub fn bdpt_replicates(
             out.image
         })
         .collect()
+}
+
+/// The bundled scene `scenes/<name>` at `size x size` pixels.
+pub fn scene_file(name: &str, size: u32) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name);
+    let mut scene = Scene::load(&path).unwrap();
+    scene.set_resolution(size, size);
+    scene
 }
