@@ -22,6 +22,7 @@ fn bdpt_matches_the_analytic_enclosure() {
             max_depth: 4,
             heuristic,
             roulette: Roulette { start: Some(2) },
+            ..BdptParams::default()
         };
         let out = bdpt::render_bdpt(
             &scene,
@@ -55,6 +56,7 @@ fn every_strategy_alone_is_unbiased() {
         max_depth: 3,
         heuristic: MisHeuristic::Balance,
         roulette: Roulette { start: None },
+        ..BdptParams::default()
     };
     let mut scratch = BdptScratch::default();
     let mut sampler = IndependentSampler::new(11);

@@ -156,7 +156,9 @@ fn remap0(f: f32) -> f32 {
 /// The MIS weight of strategy (s, t) for the path formed by the two prefixes, computed from
 /// the stored forward/reverse area densities without re-tracing (pbrt-v3 `MISWeight`, with
 /// the power heuristic as an option). `sampled` replaces the connection endpoint drawn afresh
-/// for s = 1 or t = 1.
+/// for s = 1 or t = 1. Vertices on delta lobes carry their discrete lobe probability as
+/// densities unless the subpaths were built with [`super::SpecularDensities::Zeroed`]
+/// (pbrt-v3's convention, whose zeros `remap0` skips; `bdpt::subpath`, "Specular chains").
 fn mis_weight(
     scene: SceneRef<'_>,
     light: &mut [Vertex],

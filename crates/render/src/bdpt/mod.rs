@@ -17,7 +17,7 @@ mod vertex;
 pub use connect::{connect, Connection, MisHeuristic};
 pub use render::{render_bdpt, render_bdpt_sampled, BdptOutput};
 pub use scene_api::SceneRef;
-pub use subpath::{camera_subpath, light_subpath, random_walk, Roulette};
+pub use subpath::{camera_subpath, light_subpath, random_walk, Roulette, SpecularDensities};
 pub use vertex::{geometry_term, Vertex, VertexKind, MAX_VERTICES};
 
 use glam::{Vec2, Vec3};
@@ -35,6 +35,9 @@ pub struct BdptParams {
     pub heuristic: MisHeuristic,
     /// Russian roulette (default from 3 bounces on).
     pub roulette: Roulette,
+    /// Densities of vertices on delta lobes for the MIS weights (default
+    /// [`SpecularDensities::Kept`]).
+    pub specular: SpecularDensities,
 }
 
 impl Default for BdptParams {
@@ -43,6 +46,7 @@ impl Default for BdptParams {
             max_depth: 5,
             heuristic: MisHeuristic::Power,
             roulette: Roulette { start: Some(3) },
+            specular: SpecularDensities::Kept,
         }
     }
 }
@@ -103,10 +107,19 @@ pub fn sample<S, F>(
         p_raster,
         max_depth + 2,
         params.roulette,
+        params.specular,
         camera,
     );
     let time = camera[0].time;
-    let n_light = light_subpath(scene, sampler, time, max_depth + 1, params.roulette, light);
+    let n_light = light_subpath(
+        scene,
+        sampler,
+        time,
+        max_depth + 1,
+        params.roulette,
+        params.specular,
+        light,
+    );
     // Strategy s = 1 samples its own light point (next-event estimation): it needs no light
     // subpath, so it runs even when the subpath's origin was rejected (e.g. it landed on a
     // black texel of an emissive texture) — requiring one biased it (pbrt-v3 does).
@@ -165,13 +178,22 @@ pub fn sample_strategy<S: Sampler + ?Sized>(
     let p_raster = sampler.next_2d() * image_size;
     let no_roulette = Roulette { start: None };
     let (camera, light) = scratch.reserve(depth + 2);
-    if camera_subpath(scene, sampler, p_raster, t, no_roulette, camera) != t {
+    if camera_subpath(
+        scene,
+        sampler,
+        p_raster,
+        t,
+        no_roulette,
+        params.specular,
+        camera,
+    ) != t
+    {
         return None;
     }
     let time = camera[0].time;
     // s = 1 resamples its light point in `connect`: no light subpath needed (requiring one
     // would reject paths whose unused subpath origin had no emission).
-    if s != 1 && light_subpath(scene, sampler, time, s, no_roulette, light) != s {
+    if s != 1 && light_subpath(scene, sampler, time, s, no_roulette, params.specular, light) != s {
         return None;
     }
     let c = connect(scene, light, camera, s, t, sampler, params.heuristic, true);

@@ -1,4 +1,34 @@
 //! Camera and light subpaths: random walks driven by a sampler (pbrt-v3 section 16.3.1).
+//!
+//! # Specular chains
+//!
+//! Every vertex stores the area density with which the walk reached it (`pdf_fwd`) and the
+//! density with which a walk from the other end would reach it (`pdf_rev`); the MIS weights
+//! ([`super::connect`]) are products of their ratios (Veach 1997, section 10.2). At a vertex
+//! sampled from a delta lobe (smooth glass, mirror) this crate keeps the lobe's discrete
+//! probability `P` as the density in both directions and converts it to area with the next
+//! segment's `|cos| / d^2`, exactly as for a rough lobe. The reading behind it: along a chain
+//! `x1 - S ... S - x4` of delta vertices, the strategies that can sample the path all sample
+//! the chain by BSDF sampling from one end, so the delta distributions cancel between them,
+//! and with the per-segment conversions kept the `d^2` of every segment cancels too: the
+//! ratio of the densities of `x4` reached from `x1` and of `x1` reached from `x4` is
+//! `p_w(x1) cos(x4) / (p_w(x4) cos(x1))` (times the lobe probabilities, which are equal both
+//! ways because the mirror's is 1 and the dielectric's Fresnel `R`, `T` are reciprocal) —
+//! the ratio the generalized geometric term of the chain gives, which is symmetric
+//! (conservation of etendue, Veach 1997 section 5.2; endpoints in media of different index
+//! add a constant `n^2` ratio that this reading drops, which only makes the weights slightly
+//! less optimal, never biased: every stored density is a function of the path alone, so the
+//! weights of one path still sum to one).
+//!
+//! pbrt-v3's `RandomWalk` instead sets both densities of a delta vertex to zero, and the
+//! ratios skip zeros (`remap0`). What is left of the chain in the ratio is then the
+//! conversion of the first segment from each non-delta end into the chain,
+//! `cos(x2) / d(x1, x2)^2` against `cos(x3) / d(x4, x3)^2`, which no longer cancel. For a
+//! caustic seen directly on the floor next to a glass sphere, `d(x1, x2)` (floor to glass) is
+//! short, and those weights hand almost all of the caustic to the camera path that happens to
+//! hit the light (strategy `s = 0`) instead of to light tracing (`t = 1`). On
+//! `scenes/cornell-glass` keeping the densities cuts BDPT's relMSE per sample to 0.66x
+//! (docs/performance.md, issue 17).
 
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -21,6 +51,21 @@ pub struct Roulette {
     pub start: Option<u32>,
 }
 
+/// How a subpath vertex sampled from a delta lobe (smooth glass, mirror) stores its
+/// densities for the MIS weights (module docs, "Specular chains"). Both are unbiased; they
+/// differ in how well the weights split paths through glass between the strategies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SpecularDensities {
+    /// The lobe's discrete probability both ways, converted to area like any density: the
+    /// ratios through a specular chain reduce to its symmetric generalized geometry (the
+    /// default).
+    #[default]
+    Kept,
+    /// pbrt-v3's `RandomWalk`: both densities zero, skipped by the ratios. Kept for
+    /// comparison (docs/performance.md, issue 17) and as the tests' negative control.
+    Zeroed,
+}
+
 /// Max component of an RGB value.
 #[inline]
 fn max_component(v: Vec3) -> f32 {
@@ -41,6 +86,7 @@ pub fn random_walk<S: Sampler + ?Sized>(
     max_new: usize,
     mode: TransportMode,
     roulette: Roulette,
+    specular: SpecularDensities,
     path: &mut [Vertex],
     origin: usize,
 ) -> usize {
@@ -122,9 +168,18 @@ pub fn random_walk<S: Sampler + ?Sized>(
         pdf_fwd = bs.pdf;
         let mut pdf_rev = hit.bsdf.pdf(bs.wi, wo_local, TransportMode::Radiance);
         if bs.is_specular {
+            // A delta lobe keeps its discrete probability as the density both ways (the
+            // lobe choice is reciprocal: mirror 1, Fresnel R or T from either side), and
+            // `convert_density` turns it into an area density with the adjacent segment, as
+            // for any other vertex (module docs, "Specular chains").
             path[idx].delta = true;
-            pdf_rev = 0.0;
-            pdf_fwd = 0.0;
+            match specular {
+                SpecularDensities::Kept => pdf_rev = bs.pdf,
+                SpecularDensities::Zeroed => {
+                    pdf_rev = 0.0;
+                    pdf_fwd = 0.0;
+                }
+            }
         }
         if let Some(start) = roulette.start {
             if added as u32 >= start {
@@ -154,6 +209,7 @@ pub fn camera_subpath<S: Sampler + ?Sized>(
     p_raster: Vec2,
     max_vertices: usize,
     roulette: Roulette,
+    specular: SpecularDensities,
     path: &mut [Vertex],
 ) -> usize {
     if max_vertices == 0 {
@@ -179,6 +235,7 @@ pub fn camera_subpath<S: Sampler + ?Sized>(
         max_vertices - 1,
         TransportMode::Radiance,
         roulette,
+        specular,
         path,
         0,
     )
@@ -194,6 +251,7 @@ pub fn light_subpath<S: Sampler + ?Sized>(
     time: f32,
     max_vertices: usize,
     roulette: Roulette,
+    specular: SpecularDensities,
     path: &mut [Vertex],
 ) -> usize {
     if max_vertices == 0 {
@@ -233,6 +291,7 @@ pub fn light_subpath<S: Sampler + ?Sized>(
         max_vertices - 1,
         TransportMode::Importance,
         roulette,
+        specular,
         path,
         0,
     );

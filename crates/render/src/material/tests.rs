@@ -211,6 +211,71 @@ fn delta_lobes() {
     assert!(tir.wi.z < 0.0 && tir.pdf == 1.0);
 }
 
+/// BDPT keeps a delta lobe's discrete probability as its density in both directions
+/// (`bdpt::subpath`, "Specular chains"), which is exact only if choosing the lobe is as
+/// likely from `wi` as from `wo`: the mirror's 1, and the dielectric's Fresnel `R` and `T`
+/// from either side of the interface (checked from outside and inside, both lobes, at
+/// every angle short of grazing). Negative control: the transmission
+/// probability evaluated as if `wi` were on the other side (the IOR not inverted) differs.
+#[test]
+fn delta_lobe_choice_is_reciprocal() {
+    let mut rng = rng(71);
+    let glass = Bsdf::smooth_dielectric(1.5, Vec3::ONE);
+    let mirror = Bsdf::smooth_conductor(Vec3::splat(0.8));
+    let mut control_differs = 0;
+    let mut transmissions = 0;
+    for _ in 0..2000 {
+        let wo = random_dir(&mut rng);
+        // Within 3 degrees of grazing the f32 refraction loses digits (not the lobe choice).
+        if wo.z.abs() < 0.05 {
+            continue;
+        }
+        for bsdf in [glass, mirror] {
+            let u: f32 = rng.random();
+            let Some(fwd) = bsdf.sample(wo, u, Vec2::ZERO, TransportMode::Radiance) else {
+                continue;
+            };
+            // Back from `wi`: the number that picks the same lobe (reflection below R).
+            let back_r = match bsdf {
+                Bsdf::SmoothDielectric(d) => fresnel_dielectric(fwd.wi.z, d.eta()),
+                _ => 1.0,
+            };
+            let reflected = fwd.eta == 1.0 && (fwd.wi.z > 0.0) == (wo.z > 0.0);
+            let u_back = if reflected {
+                0.5 * back_r
+            } else {
+                0.5 + 0.5 * back_r
+            };
+            let back = bsdf.sample(fwd.wi, u_back, Vec2::ZERO, TransportMode::Radiance);
+            let back = back.expect("the reverse lobe exists");
+            assert!(
+                (back.wi - wo).length() < 1e-4,
+                "{wo} -> {} -> {}",
+                fwd.wi,
+                back.wi
+            );
+            assert!(
+                rel_close(back.pdf, fwd.pdf, 1e-4),
+                "lobe probability {} forward, {} back (wo {wo})",
+                fwd.pdf,
+                back.pdf
+            );
+            if !reflected {
+                transmissions += 1;
+                let wrong = 1.0 - fresnel_dielectric(-fwd.wi.z, 1.5);
+                if !rel_close(wrong, fwd.pdf, 1e-3) {
+                    control_differs += 1;
+                }
+            }
+        }
+    }
+    assert!(transmissions > 500, "{transmissions} transmissions");
+    assert!(
+        control_differs > transmissions / 2,
+        "negative control: {control_differs} of {transmissions} differ"
+    );
+}
+
 #[test]
 fn grazing_wo_gives_no_sample() {
     let wo = Vec3A::X;

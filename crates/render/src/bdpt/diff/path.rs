@@ -397,8 +397,9 @@ impl Ctx<'_> {
             let mut pdf_rev = bsdf::pdf(&surface, bs.wi, wo_local);
             if bs.is_specular {
                 path[idx].delta = true;
-                pdf_rev = T::cst(0.0);
-                pdf_fwd = T::cst(0.0);
+                // Delta lobes keep their discrete probability both ways
+                // (`bdpt::subpath`, "Specular chains").
+                pdf_rev = bs.pdf;
             }
             if !beta.is_finite() || beta.is_zero() {
                 break;
