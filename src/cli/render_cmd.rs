@@ -134,7 +134,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "off|N", value_parser = parse::roulette)]
     roulette: Option<render::bdpt::Roulette>,
     /// pt and bdpt: the per-pixel sampler, `independent` or `sobol` (Owen-scrambled Sobol
-    /// points, stratified per pixel) [default: sobol for pt, independent for bdpt]. Other
+    /// points, stratified per pixel) [default: sobol]. Other
     /// integrators own their numbers.
     #[arg(long, value_name = "independent|sobol")]
     sampler: Option<render::sampler::SamplerKind>,
