@@ -57,8 +57,11 @@ fn scene() -> &'static Scene {
     CELL.get_or_init(|| scene_file("cornell-glass.gltf", SIZE))
 }
 
-/// `R` PT renders (seeds `seed0..`).
-fn pt(spp: u32, seed0: u64) -> &'static [Image] {
+/// Samples per pixel of the PT reference replicates.
+const PT_SPP: u32 = 256;
+
+/// The PT reference: `R` renders of `PT_SPP` samples per pixel (seeds 1..), made once.
+fn pt() -> &'static [Image] {
     static CELL: OnceLock<Vec<Image>> = OnceLock::new();
     CELL.get_or_init(|| {
         (0..R as u64)
@@ -67,8 +70,8 @@ fn pt(spp: u32, seed0: u64) -> &'static [Image] {
                     width: SIZE,
                     height: SIZE,
                     integrator: IntegratorKind::Pt,
-                    budget: Budget::SamplesPerPixel(spp),
-                    seed: seed0 + r,
+                    budget: Budget::SamplesPerPixel(PT_SPP),
+                    seed: 1 + r,
                     max_depth: DEPTH,
                     ..RenderSettings::default()
                 };
@@ -137,11 +140,9 @@ fn total(image: &Image) -> f64 {
         .sum()
 }
 
-const PT_SPP: u32 = 256;
-
 #[test]
 fn both_specular_conventions_match_path_tracing() {
-    let reference = pt(PT_SPP, 1);
+    let reference = pt();
     against_reference("kept", &images(kept()), reference, BLOCKS, critical());
     against_reference("zeroed", &images(zeroed()), reference, BLOCKS, critical());
 }
@@ -151,7 +152,7 @@ fn both_specular_conventions_match_path_tracing() {
 /// value).
 #[test]
 fn dropping_the_caustic_strategy_is_detected() {
-    let reference = pt(PT_SPP, 1);
+    let reference = pt();
     let without: Vec<Image> = kept()
         .iter()
         .map(|o| {
