@@ -134,8 +134,8 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "off|N", value_parser = parse::roulette)]
     roulette: Option<render::bdpt::Roulette>,
     /// pt and bdpt: the per-pixel sampler, `independent` or `sobol` (Owen-scrambled Sobol
-    /// points, stratified per pixel) [default: sobol]. Other
-    /// integrators own their numbers.
+    /// points, stratified per pixel); pssmlt: its direct-lighting pass's [default: sobol].
+    /// Other integrators own their numbers.
     #[arg(long, value_name = "independent|sobol")]
     sampler: Option<render::sampler::SamplerKind>,
     /// BDPT only: also write the MIS-weighted image of every strategy (s, t) next to the

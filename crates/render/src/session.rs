@@ -153,11 +153,17 @@ pub const fn direct_pass_default(integrator: IntegratorKind) -> crate::mlt::dire
 /// measured scenes (x0.91 cornell-glass, x0.89 caustic-pool, x0.96 ajar-door; 10 s, 128 x 128,
 /// 2 threads, 3 seeds), and for BDPT since its MIS weights keep the densities of delta-lobe
 /// vertices (x0.98 cornell-glass, x0.93 caustic-pool, x0.97 ajar-door, the last two every
-/// seed); independent numbers for the others (docs/performance.md, "Owen-scrambled Sobol
-/// sampler for PT and BDPT" and "Specular chains in BDPT's MIS weights", issue 17).
+/// seed), and for PSSMLT's direct-lighting pass (x0.90 cornell-glass, x0.79 caustic-pool,
+/// x0.91 ajar-door in PSSMLT's equal-time relMSE, 8 of 9 seeds better); independent numbers
+/// for the others (docs/performance.md, "Owen-scrambled Sobol sampler for PT and BDPT",
+/// "Specular chains in BDPT's MIS weights" and "Sobol points for PSSMLT's direct-lighting
+/// pass", issue 17).
 #[must_use]
 pub const fn sampler_default(integrator: IntegratorKind) -> SamplerKind {
-    if matches!(integrator, IntegratorKind::Pt | IntegratorKind::Bdpt) {
+    if matches!(
+        integrator,
+        IntegratorKind::Pt | IntegratorKind::Bdpt | IntegratorKind::Pssmlt
+    ) {
         SamplerKind::Sobol
     } else {
         SamplerKind::Independent
@@ -179,11 +185,14 @@ pub const fn pt_roulette_default(integrator: IntegratorKind) -> Option<u32> {
     }
 }
 
-/// Whether `integrator` takes a [`RenderSettings::sampler`] (PT and BDPT; the Halton, MCMC
-/// and LQMC integrators own their numbers).
+/// Whether `integrator` takes a [`RenderSettings::sampler`] (PT and BDPT, and PSSMLT for its
+/// direct-lighting pass; the Halton, other MCMC and LQMC integrators own their numbers).
 #[must_use]
 pub const fn takes_sampler(integrator: IntegratorKind) -> bool {
-    matches!(integrator, IntegratorKind::Pt | IntegratorKind::Bdpt)
+    matches!(
+        integrator,
+        IntegratorKind::Pt | IntegratorKind::Bdpt | IntegratorKind::Pssmlt
+    )
 }
 
 /// Default mutations per chain in the estimation phase of automatic large-step control.
@@ -221,8 +230,9 @@ pub struct RenderSettings {
     /// length).
     /// docs/performance.md, "Equal-time efficiency (issue 17)", has the measurements.
     pub roulette: Option<bdpt::Roulette>,
-    /// PT and BDPT: the per-pixel sampler; `None` (default) is [`sampler_default`]. Other
-    /// integrators reject `Some` ([`validate`]).
+    /// PT and BDPT: the per-pixel sampler; PSSMLT: its direct-lighting pass's
+    /// ([`McmcSettings::direct`]). `None` (default) is [`sampler_default`]. Other integrators
+    /// reject `Some` ([`validate`]).
     pub sampler: Option<SamplerKind>,
 }
 
@@ -321,7 +331,7 @@ pub fn validate(settings: &RenderSettings) -> Result<(), RenderError> {
             return Err(RenderError::setting(
                 "sampler",
                 kind,
-                "independent or sobol with --integrator pt or bdpt only",
+                "independent or sobol with --integrator pt, bdpt or pssmlt only",
             ));
         }
     }
@@ -565,6 +575,9 @@ fn render_bidirectional(
         let pass = mlt::direct::render_direct(
             scene,
             &params,
+            settings
+                .sampler
+                .unwrap_or(sampler_default(settings.integrator)),
             budget,
             settings.seed,
             progress,

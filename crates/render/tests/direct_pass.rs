@@ -2,7 +2,8 @@
 //! plus chains restricted to depths >= 2 converges to the BDPT reference of the full image
 //! (Cornell box, depth 5), and two negative controls fail the same comparison: the restricted
 //! chains without the pass (direct light missing) and the pass added to unrestricted chains
-//! (direct light counted twice).
+//! (direct light counted twice). The pass is checked with both per-pixel samplers (independent
+//! numbers and the Owen-scrambled Sobol points, PSSMLT's default for it).
 //!
 //! Statistics as in `mlt_convergence.rs` (its module comment): `R` independent replicates per
 //! estimate against `K` independent BDPT references, Welch t on the image mean and on
@@ -20,6 +21,7 @@ use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::BdptParams;
 use render::image::Image;
+use render::sampler::SamplerKind;
 use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_MAX_DEPTH};
 use render::mlt::{
     render_mlt_with_estimator, LargeStepMode, MltBudget, MltEstimator, MltSettings, PssmltTarget,
@@ -32,9 +34,9 @@ const ALPHA_FAMILY: f64 = 0.001;
 const R: usize = 16;
 const K: usize = 16;
 const BLOCKS: usize = 4;
-/// The positive case: image mean and blocks. (The negative controls are expected to exceed
-/// the same critical value; they are not null-hypothesis comparisons.)
-const N_COMPARISONS: usize = 1 + BLOCKS * BLOCKS;
+/// The positive cases, one per sampler: image mean and blocks. (The negative controls are
+/// expected to exceed the same critical value; they are not null-hypothesis comparisons.)
+const N_COMPARISONS: usize = 2 * (1 + BLOCKS * BLOCKS);
 const SIZE: u32 = 16;
 const DEPTH: u32 = 5;
 const PASS: DirectPass = DirectPass::Fixed(16);
@@ -62,8 +64,8 @@ fn reference() -> &'static [Image] {
 }
 
 /// One replicate: PSSMLT (large-step MIS on, as the CLI default) whose chains sample depths
-/// `>= chain_min_depth`, plus the direct pass if `with_pass`.
-fn replicate(seed: u64, chain_min_depth: u32, with_pass: bool) -> Image {
+/// `>= chain_min_depth`, plus the direct pass drawn from `pass` if it is `Some`.
+fn replicate(seed: u64, chain_min_depth: u32, pass: Option<SamplerKind>) -> Image {
     let settings = MltSettings {
         width: SIZE as usize,
         height: SIZE as usize,
@@ -95,10 +97,18 @@ fn replicate(seed: u64, chain_min_depth: u32, with_pass: bool) -> Image {
     );
     assert!(out.message.is_none(), "{:?}", out.message);
     let mut image = out.image;
-    if with_pass {
+    if let Some(sampler) = pass {
         let budget = PASS.budget(Some(64.0), None);
         assert_eq!(budget, (Some(16), None));
-        let pass = render_direct(cornell(), &params(), budget, seed, &NoProgress, &cancel);
+        let pass = render_direct(
+            cornell(),
+            &params(),
+            sampler,
+            budget,
+            seed,
+            &NoProgress,
+            &cancel,
+        );
         assert_eq!(pass.spp, 16);
         add_into(&mut image, &pass.image);
     }
@@ -106,9 +116,9 @@ fn replicate(seed: u64, chain_min_depth: u32, with_pass: bool) -> Image {
     image
 }
 
-fn replicates(seed0: u64, chain_min_depth: u32, with_pass: bool) -> Vec<Image> {
+fn replicates(seed0: u64, chain_min_depth: u32, pass: Option<SamplerKind>) -> Vec<Image> {
     (0..R as u64)
-        .map(|r| replicate(seed0 + r, chain_min_depth, with_pass))
+        .map(|r| replicate(seed0 + r, chain_min_depth, pass))
         .collect()
 }
 
@@ -129,23 +139,28 @@ fn pssmlt_with_a_direct_pass_converges_to_bdpt() {
     assert!(PASS.applies_to(DEPTH));
     let min_depth = PASS.chain_min_depth(DEPTH);
     assert_eq!(min_depth, DIRECT_MAX_DEPTH + 1);
-    let images = replicates(40_000, min_depth, true);
-    against_reference(
-        "cornell PSSMLT + direct pass",
-        &images,
-        reference(),
-        BLOCKS,
-        critical(),
-    );
+    for (sampler, seed0) in [
+        (SamplerKind::Independent, 40_000),
+        (SamplerKind::Sobol, 43_000),
+    ] {
+        let images = replicates(seed0, min_depth, Some(sampler));
+        against_reference(
+            &format!("cornell PSSMLT + direct pass ({sampler})"),
+            &images,
+            reference(),
+            BLOCKS,
+            critical(),
+        );
+    }
 }
 
 #[test]
 fn negative_controls_missing_or_doubled_direct_light_fail() {
     let crit = critical();
     // The restricted chains alone: direct light is missing.
-    let missing = mean_t(&replicates(41_000, PASS.chain_min_depth(DEPTH), false));
+    let missing = mean_t(&replicates(41_000, PASS.chain_min_depth(DEPTH), None));
     // The pass added to chains over every depth: direct light counted twice.
-    let doubled = mean_t(&replicates(42_000, 0, true));
+    let doubled = mean_t(&replicates(42_000, 0, Some(SamplerKind::Sobol)));
     eprintln!(
         "negative controls: t missing {missing:.1}, t doubled {doubled:.1}, critical {crit:.2}"
     );

@@ -212,11 +212,7 @@ fn same_seed_one_and_two_threads_are_bit_identical() {
 #[test]
 fn the_sampler_is_an_error_for_integrators_that_own_their_numbers() {
     let scene = Scene::cornell_box(8, 8);
-    for integrator in [
-        IntegratorKind::Pssmlt,
-        IntegratorKind::Mmlt,
-        IntegratorKind::Qmc,
-    ] {
+    for integrator in [IntegratorKind::Mmlt, IntegratorKind::Qmc] {
         let settings = RenderSettings {
             width: 8,
             height: 8,
@@ -230,9 +226,44 @@ fn the_sampler_is_an_error_for_integrators_that_own_their_numbers() {
                     field: "sampler", ..
                 },
             ) => {
-                assert!(e.to_string().contains("pt or bdpt"), "{e}");
+                assert!(e.to_string().contains("pt, bdpt or pssmlt"), "{e}");
             }
             other => panic!("{integrator:?}: expected a sampler error, got {other:?}"),
         }
     }
+}
+
+/// PSSMLT takes the sampler for its direct-lighting pass: the setting reaches the pass (the
+/// two samplers give different images, the default is Sobol's).
+#[test]
+fn pssmlt_draws_its_direct_pass_from_the_sampler() {
+    let scene = Scene::cornell_box(8, 8);
+    let image = |sampler| {
+        let settings = RenderSettings {
+            width: 8,
+            height: 8,
+            integrator: IntegratorKind::Pssmlt,
+            budget: Budget::SamplesPerPixel(8),
+            threads: 2,
+            seed: 5,
+            sampler,
+            ..RenderSettings::default()
+        };
+        render(&scene, &settings, &NoProgress, &AtomicBool::new(false))
+            .expect("pssmlt takes --sampler")
+            .image
+    };
+    let (default, sobol, independent) = (
+        image(None),
+        image(Some(SamplerKind::Sobol)),
+        image(Some(SamplerKind::Independent)),
+    );
+    assert!(
+        default.pixels == sobol.pixels,
+        "the default is not the Sobol pass"
+    );
+    assert!(
+        sobol.pixels != independent.pixels,
+        "the sampler does not reach the direct pass"
+    );
 }

@@ -25,8 +25,9 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use crate::bdpt::{render_bdpt, BdptOutput, BdptParams};
+use crate::bdpt::{render_bdpt_sampled, BdptOutput, BdptParams};
 use crate::image::Image;
+use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use mcmc_core::Progress;
 
@@ -155,7 +156,8 @@ impl Default for DirectPass {
 }
 
 /// Renders the direct pass: BDPT at maximum depth [`DIRECT_MAX_DEPTH`] (the other
-/// parameters, roulette included, from `params`) on the camera's image size, `spp` samples per
+/// parameters, roulette included, from `params`), drawing from the per-pixel `sampler`
+/// (stratified Sobol points suit direct light best: it is smooth), on the camera's image size, `spp` samples per
 /// pixel or until `time` has passed (at least one pass; every pixel is the mean of its own
 /// samples, so a pass stopped by time stays unbiased) — [`DirectPass::budget`] gives both. The
 /// seed is mixed so the pass draws other numbers than a BDPT render of the same seed (not
@@ -164,6 +166,7 @@ impl Default for DirectPass {
 pub fn render_direct(
     scene: &Scene,
     params: &BdptParams,
+    sampler: SamplerKind,
     (spp, time): (Option<u32>, Option<Duration>),
     seed: u64,
     progress: &dyn Progress,
@@ -173,9 +176,10 @@ pub fn render_direct(
         max_depth: params.max_depth.min(DIRECT_MAX_DEPTH),
         ..*params
     };
-    render_bdpt(
+    render_bdpt_sampled(
         scene,
         &direct,
+        sampler,
         spp.map(|n| n.max(1)),
         time,
         seed ^ 0xD1EC_7000_0000_0001,

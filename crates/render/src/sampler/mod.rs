@@ -82,7 +82,7 @@ pub trait PixelSampler: Sampler {
     fn start_pixel_sample(&mut self, pixel_index: u64, sample_index: u64);
 }
 
-/// Which per-pixel sampler PT and BDPT draw from (`--sampler`).
+/// Which per-pixel sampler PT, BDPT and PSSMLT's direct-lighting pass draw from (`--sampler`).
 ///
 /// ```
 /// use render::sampler::SamplerKind;
