@@ -21,12 +21,12 @@ use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::BdptParams;
 use render::image::Image;
-use render::sampler::SamplerKind;
 use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_MAX_DEPTH};
 use render::mlt::{
     render_mlt_with_estimator, LargeStepMode, MltBudget, MltEstimator, MltSettings, PssmltTarget,
     PATH_STREAMS,
 };
+use render::sampler::SamplerKind;
 use render::scene::Scene;
 use render::session::NoProgress;
 
