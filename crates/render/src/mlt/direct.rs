@@ -156,13 +156,13 @@ impl Default for DirectPass {
 }
 
 /// Renders the direct pass: BDPT at maximum depth [`DIRECT_MAX_DEPTH`] (the other
-/// parameters, roulette included, from `params`), drawing from the per-pixel `sampler`
-/// (stratified Sobol points suit direct light best: it is smooth), on the camera's image size, `spp` samples per
-/// pixel or until `time` has passed (at least one pass; every pixel is the mean of its own
-/// samples, so a pass stopped by time stays unbiased) — [`DirectPass::budget`] gives both. The
-/// seed is mixed so the pass draws other numbers than a BDPT render of the same seed (not
-/// needed for unbiasedness, only for independence from anything else the caller renders with
-/// `seed`).
+/// parameters, roulette included, from `params`) drawing from the per-pixel `sampler`
+/// (stratified Sobol points suit smooth direct light; PSSMLT's default), on the camera's
+/// image size, `spp` samples per pixel or until `time` has passed (at least one pass; every
+/// pixel is the mean of its own samples, so a pass stopped by time stays unbiased) —
+/// [`DirectPass::budget`] gives both. The seed is mixed so the pass draws other numbers than
+/// a BDPT render of the same seed (not needed for unbiasedness, only for independence from
+/// anything else the caller renders with `seed`).
 pub fn render_direct(
     scene: &Scene,
     params: &BdptParams,
