@@ -160,10 +160,7 @@ pub const fn direct_pass_default(integrator: IntegratorKind) -> crate::mlt::dire
 /// pass", issue 17).
 #[must_use]
 pub const fn sampler_default(integrator: IntegratorKind) -> SamplerKind {
-    if matches!(
-        integrator,
-        IntegratorKind::Pt | IntegratorKind::Bdpt | IntegratorKind::Pssmlt
-    ) {
+    if takes_sampler(integrator) {
         SamplerKind::Sobol
     } else {
         SamplerKind::Independent
@@ -193,6 +190,15 @@ pub const fn takes_sampler(integrator: IntegratorKind) -> bool {
         integrator,
         IntegratorKind::Pt | IntegratorKind::Bdpt | IntegratorKind::Pssmlt
     )
+}
+
+/// The per-pixel sampler `settings` asks for: [`RenderSettings::sampler`], or
+/// [`sampler_default`] of its integrator.
+const fn sampler_of(settings: &RenderSettings) -> SamplerKind {
+    match settings.sampler {
+        Some(kind) => kind,
+        None => sampler_default(settings.integrator),
+    }
 }
 
 /// Default mutations per chain in the estimation phase of automatic large-step control.
@@ -448,9 +454,7 @@ fn render_pt(
         max_depth: settings.max_depth,
         budget: settings.budget,
         seed: settings.seed,
-        sampler: settings
-            .sampler
-            .unwrap_or(sampler_default(settings.integrator)),
+        sampler: sampler_of(settings),
         roulette: settings
             .roulette
             .map_or(pt_roulette_default(settings.integrator), |r| r.start),
@@ -496,9 +500,7 @@ fn render_bdpt(
     let out = bdpt::render_bdpt_sampled(
         scene,
         &params,
-        settings
-            .sampler
-            .unwrap_or(sampler_default(settings.integrator)),
+        sampler_of(settings),
         spp,
         time,
         settings.seed,
@@ -575,9 +577,7 @@ fn render_bidirectional(
         let pass = mlt::direct::render_direct(
             scene,
             &params,
-            settings
-                .sampler
-                .unwrap_or(sampler_default(settings.integrator)),
+            sampler_of(settings),
             budget,
             settings.seed,
             progress,
