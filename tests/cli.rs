@@ -1072,7 +1072,8 @@ fn raster_mutation_flag_sets_the_probability() {
 }
 
 /// `--roulette off|N` and `--small-step kelemen=S1,S2` (issue 17, item 1) and
-/// `--direct-samples N` (item 2; default 64 for pssmlt, off elsewhere): bad values name the
+/// `--direct-samples N` and `--direct-depth K` (item 2; on for pssmlt in proportion to the
+/// budget, depth 2, off elsewhere): bad values name the
 /// flag and the allowed range; good ones render, and the direct pass says so in the log.
 #[test]
 fn roulette_small_step_and_direct_pass_flags() {
@@ -1114,6 +1115,12 @@ fn roulette_small_step_and_direct_pass_flags() {
         ],
         &["--direct-samples", "0..=65536"],
     );
+    for bad in ["0", "65"] {
+        assert_fails_with(
+            &["render", "--integrator", "pssmlt", "--direct-depth", bad],
+            &["--direct-depth", "1..=64"],
+        );
+    }
     let dir = temp_dir("roulette-direct");
     let out = dir.join("img.exr");
     // (arguments, whether the direct pass runs: on by default for pssmlt, 0 turns it off,
@@ -1139,6 +1146,7 @@ fn roulette_small_step_and_direct_pass_flags() {
             &["--integrator", "pssmlt", "--direct-samples", "0"][..],
             false,
         ),
+        (&["--integrator", "pssmlt", "--direct-depth", "1"][..], true),
         (
             &["--integrator", "mmlt", "--direct-samples", "4"][..],
             false,
@@ -1168,6 +1176,15 @@ fn roulette_small_step_and_direct_pass_flags() {
             direct,
             "{extra:?}: {text}"
         );
+        if direct {
+            // The pass's depth: 2 by default, `--direct-depth` sets it.
+            let depths = if extra.contains(&"--direct-depth") {
+                "depths 0-1 by BDPT"
+            } else {
+                "depths 0-2 by BDPT"
+            };
+            assert!(text.contains(depths), "{extra:?}: {text}");
+        }
         assert!(read_exr(&out).unwrap().mean_luminance() > 0.0);
     }
 }

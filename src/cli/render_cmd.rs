@@ -107,12 +107,17 @@ pub(crate) struct RenderArgs {
           value_parser = clap::value_parser!(u64).range(0..=100_000_000))]
     bdpt_normalization: u64,
     /// pssmlt: a separate direct-lighting pass (Mitsuba 0.6's `directSamples`): BDPT renders
-    /// path depths 0 and 1 at N samples per pixel first (under --time at most a quarter of
-    /// the time), the chains only depths >= 2; 0..=65536, 0 = off [default for pssmlt: half
-    /// a sample per mutation per pixel, or a tenth of --time].
+    /// path depths 0..=K (--direct-depth) at N samples per pixel first (under --time at most a
+    /// quarter of the time), the chains only deeper paths; 0..=65536, 0 = off [default for
+    /// pssmlt: half a sample per mutation per pixel, or 15 % of --time].
     #[arg(long, value_name = "N",
           value_parser = clap::value_parser!(u32).range(0..=65_536))]
     direct_samples: Option<u32>,
+    /// pssmlt: the direct pass's depth K, 1..=64: BDPT renders paths of up to K bounces, the
+    /// chains the deeper ones (1: direct light only; no pass if K >= --max-depth).
+    #[arg(long, value_name = "K", default_value_t = render::mlt::direct::DIRECT_DEPTH_DEFAULT,
+          value_parser = clap::value_parser!(u32).range(1..=64))]
+    direct_depth: u32,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
     /// al. 2002), `kelemen=S1,S2` (0 < S1 < S2 <= 0.5) or `gaussian=SIGMA` with SIGMA in
     /// (0, 10] (pbrt-v3 uses gaussian=0.01).
@@ -316,6 +321,7 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             direct: args
                 .direct_samples
                 .map(render::mlt::direct::DirectPass::Fixed),
+            direct_depth: Some(args.direct_depth),
         },
         strategy_images: args.strategy_images,
         roulette: args.roulette,

@@ -79,11 +79,15 @@ pub struct McmcSettings {
     /// bootstrap's. Other integrators ignore it.
     pub mmlt_bdpt_normalization: u64,
     /// PSSMLT: a separate direct-lighting pass (`--direct-samples N`; [`crate::mlt::direct`],
-    /// Mitsuba 0.6's `directSamples`): BDPT renders depths 0 and 1 at N samples per pixel and
-    /// the chains only depths >= 2. `None` (default): the integrator's measured default,
-    /// [`direct_pass_default`] (for PSSMLT half a sample per mutation, or a tenth of a time
-    /// budget). Other integrators ignore it.
+    /// Mitsuba 0.6's `directSamples`): BDPT renders depths 0..=K (see `direct_depth`) at N
+    /// samples per pixel and the chains only depths > K. `None` (default): the integrator's
+    /// measured default, [`direct_pass_default`] (for PSSMLT half a sample per mutation, or
+    /// 15 % of a time budget). Other integrators ignore it.
     pub direct: Option<crate::mlt::direct::DirectPass>,
+    /// PSSMLT: the direct pass's depth K (`--direct-depth K`, at least 1): the pass renders
+    /// depths up to K, the chains the deeper ones; no pass if K >= the maximum depth.
+    /// `None` (default): [`crate::mlt::direct::DIRECT_DEPTH_DEFAULT`] (2).
+    pub direct_depth: Option<u32>,
 }
 
 impl Default for McmcSettings {
@@ -104,6 +108,7 @@ impl Default for McmcSettings {
             mmlt_strategy_strata: false,
             mmlt_bdpt_normalization: 0,
             direct: None,
+            direct_depth: None,
         }
     }
 }
@@ -139,6 +144,8 @@ pub const fn raster_mutation_default(integrator: IntegratorKind) -> pss::RasterP
 /// x0.90 ajar-door, x0.90 caustic-pool with 1 of 3 seeds better; 128 x 128, max depth 10,
 /// 2 threads), in proportion to the budget so longer renders do not hit the fixed pass's noise
 /// floor; off for the others (docs/performance.md, "Direct-lighting pass (issue 17, item 2)").
+/// Since the pass renders depths up to 2 by default ([`McmcSettings::direct_depth`]) its share
+/// of a time budget is 15 % ("A deeper direct pass for PSSMLT").
 #[must_use]
 pub const fn direct_pass_default(integrator: IntegratorKind) -> crate::mlt::direct::DirectPass {
     if matches!(integrator, IntegratorKind::Pssmlt) {
@@ -566,8 +573,12 @@ fn render_bidirectional(
     // PSSMLT's separate direct-lighting pass (`mlt::direct`), rendered first; under a time
     // budget the chains get what is left.
     let direct_pass = m.direct.unwrap_or(direct_pass_default(settings.integrator));
+    let pass_depth = m
+        .direct_depth
+        .unwrap_or(mlt::direct::DIRECT_DEPTH_DEFAULT)
+        .max(1);
     let direct = (settings.integrator == IntegratorKind::Pssmlt
-        && direct_pass.applies_to(settings.max_depth))
+        && direct_pass.applies_to(settings.max_depth, pass_depth))
     .then(|| {
         let t0 = Instant::now();
         let budget = match settings.budget {
@@ -577,6 +588,7 @@ fn render_bidirectional(
         let pass = mlt::direct::render_direct(
             scene,
             &params,
+            pass_depth,
             sampler_of(settings),
             budget,
             settings.seed,
@@ -585,15 +597,15 @@ fn render_bidirectional(
         );
         notes.push(format!(
             "direct-lighting pass: depths 0-{} by BDPT at {} spp ({:.2} s); the chains sample depths >= {}",
-            mlt::direct::DIRECT_MAX_DEPTH,
+            pass_depth,
             pass.spp,
             t0.elapsed().as_secs_f64(),
-            mlt::direct::DIRECT_MAX_DEPTH + 1
+            pass_depth + 1
         ));
         (pass, t0.elapsed())
     });
     let min_depth = if direct.is_some() {
-        direct_pass.chain_min_depth(settings.max_depth)
+        direct_pass.chain_min_depth(settings.max_depth, pass_depth)
     } else {
         0
     };
@@ -776,10 +788,9 @@ fn render_bidirectional(
     let (mut dropped, mut cancelled) = (out.dropped + out.non_finite, out.cancelled);
     if let Some((pass, _)) = &direct {
         if out.mutations == 0 {
-            notes.push(
-                "cancelled before the chains ran: the image holds only the direct-lighting pass (path depths 0-1)"
-                    .to_owned(),
-            );
+            notes.push(format!(
+                "cancelled before the chains ran: the image holds only the direct-lighting pass (path depths 0-{pass_depth})"
+            ));
         }
         mlt::direct::add_into(&mut image, &pass.image);
         dropped += pass.dropped;

@@ -1,9 +1,9 @@
-//! PSSMLT with a separate direct-lighting pass (`render::mlt::direct`): BDPT at depth <= 1
-//! plus chains restricted to depths >= 2 converges to the BDPT reference of the full image
+//! PSSMLT with a separate direct-lighting pass (`render::mlt::direct`): BDPT at depth <= K
+//! plus chains restricted to depths > K converges to the BDPT reference of the full image
 //! (Cornell box, depth 5), and two negative controls fail the same comparison: the restricted
-//! chains without the pass (direct light missing) and the pass added to unrestricted chains
-//! (direct light counted twice). The pass is checked with both per-pixel samplers (independent
-//! numbers and the Owen-scrambled Sobol points, PSSMLT's default for it).
+//! chains without the pass (the pass's light missing) and the pass added to unrestricted
+//! chains (counted twice). Checked for K = 1 with independent numbers and for the default
+//! K = 2 with the Owen-scrambled Sobol points (PSSMLT's default sampler for the pass).
 //!
 //! Statistics as in `mlt_convergence.rs` (its module comment): `R` independent replicates per
 //! estimate against `K` independent BDPT references, Welch t on the image mean and on
@@ -21,7 +21,7 @@ use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::BdptParams;
 use render::image::Image;
-use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_MAX_DEPTH};
+use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_DEPTH_DEFAULT};
 use render::mlt::{
     render_mlt_with_estimator, LargeStepMode, MltBudget, MltEstimator, MltSettings, PssmltTarget,
     PATH_STREAMS,
@@ -64,8 +64,9 @@ fn reference() -> &'static [Image] {
 }
 
 /// One replicate: PSSMLT (large-step MIS on, as the CLI default) whose chains sample depths
-/// `>= chain_min_depth`, plus the direct pass drawn from `pass` if it is `Some`.
-fn replicate(seed: u64, chain_min_depth: u32, pass: Option<SamplerKind>) -> Image {
+/// `>= chain_min_depth`, plus, if `pass` is `Some((sampler, depth))`, the direct pass of that
+/// depth drawn from `sampler`.
+fn replicate(seed: u64, chain_min_depth: u32, pass: Option<(SamplerKind, u32)>) -> Image {
     let settings = MltSettings {
         width: SIZE as usize,
         height: SIZE as usize,
@@ -97,12 +98,13 @@ fn replicate(seed: u64, chain_min_depth: u32, pass: Option<SamplerKind>) -> Imag
     );
     assert!(out.message.is_none(), "{:?}", out.message);
     let mut image = out.image;
-    if let Some(sampler) = pass {
+    if let Some((sampler, depth)) = pass {
         let budget = PASS.budget(Some(64.0), None);
         assert_eq!(budget, (Some(16), None));
         let pass = render_direct(
             cornell(),
             &params(),
+            depth,
             sampler,
             budget,
             seed,
@@ -116,7 +118,7 @@ fn replicate(seed: u64, chain_min_depth: u32, pass: Option<SamplerKind>) -> Imag
     image
 }
 
-fn replicates(seed0: u64, chain_min_depth: u32, pass: Option<SamplerKind>) -> Vec<Image> {
+fn replicates(seed0: u64, chain_min_depth: u32, pass: Option<(SamplerKind, u32)>) -> Vec<Image> {
     (0..R as u64)
         .map(|r| replicate(seed0 + r, chain_min_depth, pass))
         .collect()
@@ -136,16 +138,17 @@ fn mean_t(images: &[Image]) -> f64 {
 
 #[test]
 fn pssmlt_with_a_direct_pass_converges_to_bdpt() {
-    assert!(PASS.applies_to(DEPTH));
-    let min_depth = PASS.chain_min_depth(DEPTH);
-    assert_eq!(min_depth, DIRECT_MAX_DEPTH + 1);
-    for (sampler, seed0) in [
-        (SamplerKind::Independent, 40_000),
-        (SamplerKind::Sobol, 43_000),
+    assert_eq!(DIRECT_DEPTH_DEFAULT, 2);
+    for (sampler, depth, seed0) in [
+        (SamplerKind::Independent, 1, 40_000),
+        (SamplerKind::Sobol, DIRECT_DEPTH_DEFAULT, 43_000),
     ] {
-        let images = replicates(seed0, min_depth, Some(sampler));
+        assert!(PASS.applies_to(DEPTH, depth));
+        let min_depth = PASS.chain_min_depth(DEPTH, depth);
+        assert_eq!(min_depth, depth + 1);
+        let images = replicates(seed0, min_depth, Some((sampler, depth)));
         against_reference(
-            &format!("cornell PSSMLT + direct pass ({sampler})"),
+            &format!("cornell PSSMLT + direct pass of depth {depth} ({sampler})"),
             &images,
             reference(),
             BLOCKS,
@@ -157,10 +160,18 @@ fn pssmlt_with_a_direct_pass_converges_to_bdpt() {
 #[test]
 fn negative_controls_missing_or_doubled_direct_light_fail() {
     let crit = critical();
-    // The restricted chains alone: direct light is missing.
-    let missing = mean_t(&replicates(41_000, PASS.chain_min_depth(DEPTH), None));
-    // The pass added to chains over every depth: direct light counted twice.
-    let doubled = mean_t(&replicates(42_000, 0, Some(SamplerKind::Sobol)));
+    // The restricted chains alone: the pass's depths are missing.
+    let missing = mean_t(&replicates(
+        41_000,
+        PASS.chain_min_depth(DEPTH, DIRECT_DEPTH_DEFAULT),
+        None,
+    ));
+    // The pass added to chains over every depth: its depths counted twice.
+    let doubled = mean_t(&replicates(
+        42_000,
+        0,
+        Some((SamplerKind::Sobol, DIRECT_DEPTH_DEFAULT)),
+    ));
     eprintln!(
         "negative controls: t missing {missing:.1}, t doubled {doubled:.1}, critical {crit:.2}"
     );
