@@ -95,9 +95,10 @@ impl DirectPass {
     /// PSSMLT's default (`render::session::direct_pass_default`): half a direct sample per
     /// mutation, 15 % of a time budget. Measured (docs/performance.md, "Direct-lighting pass
     /// (issue 17, item 2)" and "A deeper direct pass for PSSMLT"): with the default depth 2,
-    /// 15 % of 10 s beat 10 %, 20 % and 25 % over three scenes, and made 48-72 samples per
-    /// pixel at 93-146 mutations per pixel, about 0.5 per mutation; a fixed count is a noise
-    /// floor that longer renders cannot get below.
+    /// 15 % of 10 s was the only share of 10 %, 15 %, 20 % and 25 % better than the depth-1
+    /// pass at every seed on two scenes (10 % is level on cornell-glass, 20-25 % on
+    /// ajar-door), and made 48-72 samples per pixel at 93-146 mutations per pixel, about 0.5
+    /// per mutation; a fixed count is a noise floor that longer renders cannot get below.
     pub const PSSMLT_DEFAULT: Self = Self::Proportional {
         per_mutation: 0.5,
         time_share: 0.15,
