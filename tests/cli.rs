@@ -1072,8 +1072,8 @@ fn raster_mutation_flag_sets_the_probability() {
 }
 
 /// `--roulette off|N` and `--small-step kelemen=S1,S2` (issue 17, item 1) and
-/// `--direct-samples N` and `--direct-depth K` (item 2; on for pssmlt in proportion to the
-/// budget, depth 2, off elsewhere): bad values name the
+/// `--direct-samples N`, `--direct-depth K` and `--direct-share auto|S` (item 2; on for
+/// pssmlt, balanced against the chains from a pilot, depth 2, off elsewhere): bad values name the
 /// flag and the allowed range; good ones render, and the direct pass says so in the log.
 #[test]
 fn roulette_small_step_and_direct_pass_flags() {
@@ -1121,6 +1121,24 @@ fn roulette_small_step_and_direct_pass_flags() {
             &["--direct-depth", "1..=64"],
         );
     }
+    for bad in ["0", "0.95", "half", "nan"] {
+        assert_fails_with(
+            &["render", "--integrator", "pssmlt", "--direct-share", bad],
+            &["--direct-share", "auto", "0.01..=0.9", bad],
+        );
+    }
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "pssmlt",
+            "--direct-share",
+            "0.2",
+            "--direct-samples",
+            "4",
+        ],
+        &["--direct-share", "--direct-samples", "cannot be used with"],
+    );
     let dir = temp_dir("roulette-direct");
     let out = dir.join("img.exr");
     // (arguments, whether the direct pass runs: on by default for pssmlt, 0 turns it off,
@@ -1147,6 +1165,14 @@ fn roulette_small_step_and_direct_pass_flags() {
             false,
         ),
         (&["--integrator", "pssmlt", "--direct-depth", "1"][..], true),
+        (
+            &["--integrator", "pssmlt", "--direct-share", "0.3"][..],
+            true,
+        ),
+        (
+            &["--integrator", "pssmlt", "--direct-share", "auto"][..],
+            true,
+        ),
         (
             &["--integrator", "mmlt", "--direct-samples", "4"][..],
             false,
@@ -1184,6 +1210,20 @@ fn roulette_small_step_and_direct_pass_flags() {
                 "depths 0-2 by BDPT"
             };
             assert!(text.contains(depths), "{extra:?}: {text}");
+            // The default (`auto`) balances the pass against the chains from a pilot and
+            // says what it found; a fixed share or sample count does not.
+            let expect = !extra.contains(&"--direct-samples") && !extra.contains(&"0.3");
+            assert_eq!(
+                text.contains("balanced against the chains"),
+                expect,
+                "{extra:?}: {text}"
+            );
+            if expect {
+                assert!(
+                    text.contains("of the light") && text.contains("of the budget"),
+                    "{extra:?}: {text}"
+                );
+            }
         }
         assert!(read_exr(&out).unwrap().mean_luminance() > 0.0);
     }

@@ -37,6 +37,21 @@ pub(crate) fn large_step(text: &str) -> Result<render::mlt::LargeStepMode, Strin
     }
 }
 
+/// `--direct-share`: `auto` (the balanced pass) or a share of the budget in 0.01..=0.9.
+pub(crate) fn direct_share(text: &str) -> Result<render::mlt::direct::DirectPass, String> {
+    if text.eq_ignore_ascii_case("auto") {
+        return Ok(render::mlt::direct::DirectPass::PSSMLT_DEFAULT);
+    }
+    match text.parse::<f64>() {
+        Ok(s) if (0.01..=0.9).contains(&s) => {
+            Ok(render::mlt::direct::DirectPass::with_time_share(s))
+        }
+        _ => Err(format!(
+            "expected `auto` or a share of the budget in 0.01..=0.9, got '{text}'"
+        )),
+    }
+}
+
 /// `--small-step`: `kelemen`, `kelemen=S1,S2` or `gaussian=SIGMA`.
 pub(crate) fn small_step(text: &str) -> Result<pss::SmallMutation, String> {
     if text.eq_ignore_ascii_case("kelemen") {

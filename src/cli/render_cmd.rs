@@ -109,10 +109,16 @@ pub(crate) struct RenderArgs {
     /// pssmlt: a separate direct-lighting pass (Mitsuba 0.6's `directSamples`): BDPT renders
     /// path depths 0..=K (--direct-depth) at N samples per pixel first (under --time at most a
     /// quarter of the time), the chains only deeper paths; 0..=65536, 0 = off [default for
-    /// pssmlt: half a sample per mutation per pixel, or 15 % of --time].
-    #[arg(long, value_name = "N",
+    /// pssmlt: --direct-share auto].
+    #[arg(long, value_name = "N", conflicts_with = "direct_share",
           value_parser = clap::value_parser!(u32).range(0..=65_536))]
     direct_samples: Option<u32>,
+    /// pssmlt: the direct pass's share of the budget: `auto` picks it per scene from a pilot
+    /// of 16384 BDPT samples (how much of the light the pass's depths carry; about 25 % of the
+    /// time on cornell-glass, 10 % on ajar-door), or a share in 0.01..=0.9 of --time (under
+    /// --spp the samples per mutation that cost as much) [default: auto].
+    #[arg(long, value_name = "auto|S", value_parser = parse::direct_share)]
+    direct_share: Option<render::mlt::direct::DirectPass>,
     /// pssmlt: the direct pass's depth K, 1..=64: BDPT renders paths of up to K bounces, the
     /// chains the deeper ones (1: direct light only; no pass if K >= --max-depth).
     #[arg(long, value_name = "K", default_value_t = render::mlt::direct::DIRECT_DEPTH_DEFAULT,
@@ -320,7 +326,8 @@ fn settings(args: &RenderArgs) -> RenderSettings {
             mmlt_bdpt_normalization: args.bdpt_normalization,
             direct: args
                 .direct_samples
-                .map(render::mlt::direct::DirectPass::Fixed),
+                .map(render::mlt::direct::DirectPass::Fixed)
+                .or(args.direct_share),
             direct_depth: Some(args.direct_depth),
         },
         strategy_images: args.strategy_images,

@@ -81,8 +81,8 @@ pub struct McmcSettings {
     /// PSSMLT: a separate direct-lighting pass (`--direct-samples N`; [`crate::mlt::direct`],
     /// Mitsuba 0.6's `directSamples`): BDPT renders depths 0..=K (see `direct_depth`) at N
     /// samples per pixel and the chains only depths > K. `None` (default): the integrator's
-    /// measured default, [`direct_pass_default`] (for PSSMLT half a sample per mutation, or
-    /// 15 % of a time budget). Other integrators ignore it.
+    /// measured default, [`direct_pass_default`] (for PSSMLT a share of the budget balanced
+    /// against the chains from a pilot, `--direct-share auto`). Other integrators ignore it.
     pub direct: Option<crate::mlt::direct::DirectPass>,
     /// PSSMLT: the direct pass's depth K (`--direct-depth K`, at least 1): the pass renders
     /// depths up to K, the chains the deeper ones; no pass if K >= the maximum depth.
@@ -145,7 +145,9 @@ pub const fn raster_mutation_default(integrator: IntegratorKind) -> pss::RasterP
 /// 2 threads), in proportion to the budget so longer renders do not hit the fixed pass's noise
 /// floor; off for the others (docs/performance.md, "Direct-lighting pass (issue 17, item 2)").
 /// Since the pass renders depths up to 2 by default ([`McmcSettings::direct_depth`]) its share
-/// of a time budget is 15 % ("A deeper direct pass for PSSMLT").
+/// of the budget follows how much of the light those depths carry (about 25 % of a time budget
+/// on cornell-glass, 10 % on ajar-door, 15 % on caustic-pool; "A deeper direct pass for
+/// PSSMLT" and "Balancing the direct pass against the chains").
 #[must_use]
 pub const fn direct_pass_default(integrator: IntegratorKind) -> crate::mlt::direct::DirectPass {
     if matches!(integrator, IntegratorKind::Pssmlt) {
@@ -527,6 +529,19 @@ fn render_bdpt(
     }
 }
 
+/// The most all-strategy samples a balanced direct pass's pilot may take: under a mutation
+/// budget an eighth of the mutations (at least 1024), so a tiny render is not dominated by
+/// its pilot; under a time budget [`mlt::direct::BALANCE_SAMPLES`].
+fn pilot_cap(settings: &RenderSettings) -> u64 {
+    match settings.budget {
+        Budget::SamplesPerPixel(n) => {
+            let mutations = u64::from(n) * u64::from(settings.width) * u64::from(settings.height);
+            (mutations / 8).max(1024)
+        }
+        Budget::Time(_) => mlt::direct::BALANCE_SAMPLES,
+    }
+}
+
 /// PSSMLT and MMLT.
 fn render_bidirectional(
     scene: &Scene,
@@ -581,9 +596,55 @@ fn render_bidirectional(
         && direct_pass.applies_to(settings.max_depth, pass_depth))
     .then(|| {
         let t0 = Instant::now();
+        // A balanced pass takes its share from a pilot's estimate of how the light divides.
+        let direct_pass = if let mlt::direct::DirectPass::Balanced { .. } = direct_pass {
+            let pilot = mlt::direct::BALANCE_SAMPLES.min(pilot_cap(settings));
+            let phi = mlt::direct::pilot_light_share(
+                scene,
+                &params,
+                w,
+                h,
+                pass_depth,
+                pilot,
+                settings.seed,
+                cancel,
+            );
+            let resolved = direct_pass.resolve(phi.unwrap_or(f64::NAN));
+            if let mlt::direct::DirectPass::Proportional { time_share, .. } = resolved {
+                notes.push(match phi {
+                    Some(phi) => format!(
+                        "direct-lighting pass balanced against the chains: depths 0-{pass_depth} carry {:.0} % of the light ({pilot} BDPT samples, {:.2} s) -> {:.0} % of the budget",
+                        phi * 100.0,
+                        t0.elapsed().as_secs_f64(),
+                        time_share * 100.0
+                    ),
+                    None if cancel.load(std::sync::atomic::Ordering::Relaxed) => {
+                        "cancelled during the direct-lighting pass's pilot".to_owned()
+                    }
+                    None => format!(
+                        "direct-lighting pass: the pilot found no light ({pilot} BDPT samples); {:.0} % of the budget",
+                        time_share * 100.0
+                    ),
+                });
+            }
+            resolved
+        } else {
+            direct_pass
+        };
         let budget = match settings.budget {
             Budget::SamplesPerPixel(n) => direct_pass.budget(Some(f64::from(n)), None),
-            Budget::Time(t) => direct_pass.budget(None, Some(t)),
+            // The pilot's time is the pass's.
+            Budget::Time(t) => match direct_pass.budget(None, Some(t)) {
+                (spp, Some(share)) => (
+                    spp,
+                    Some(
+                        share
+                            .saturating_sub(t0.elapsed())
+                            .max(Duration::from_millis(1)),
+                    ),
+                ),
+                other => other,
+            },
         };
         let pass = mlt::direct::render_direct(
             scene,

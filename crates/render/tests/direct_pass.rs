@@ -3,7 +3,10 @@
 //! (Cornell box, depth 5), and two negative controls fail the same comparison: the restricted
 //! chains without the pass (the pass's light missing) and the pass added to unrestricted
 //! chains (counted twice). Checked for K = 1 with independent numbers and for the default
-//! K = 2 with the Owen-scrambled Sobol points (PSSMLT's default sampler for the pass).
+//! K = 2 with the Owen-scrambled Sobol points (PSSMLT's default sampler for the pass), and for
+//! the whole default through `session::render`: the balanced pass, whose share of the budget
+//! a pilot picks from its own samples (the pass and the chains stay unbiased for any share
+//! that does not depend on their own numbers).
 //!
 //! Statistics as in `mlt_convergence.rs` (its module comment): `R` independent replicates per
 //! estimate against `K` independent BDPT references, Welch t on the image mean and on
@@ -28,15 +31,15 @@ use render::mlt::{
 };
 use render::sampler::SamplerKind;
 use render::scene::Scene;
-use render::session::NoProgress;
+use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
 
 const ALPHA_FAMILY: f64 = 0.001;
 const R: usize = 16;
 const K: usize = 16;
 const BLOCKS: usize = 4;
-/// The positive cases, one per sampler: image mean and blocks. (The negative controls are
+/// The positive cases, one per sampler and the session default: image mean and blocks. (The negative controls are
 /// expected to exceed the same critical value; they are not null-hypothesis comparisons.)
-const N_COMPARISONS: usize = 2 * (1 + BLOCKS * BLOCKS);
+const N_COMPARISONS: usize = 3 * (1 + BLOCKS * BLOCKS);
 const SIZE: u32 = 16;
 const DEPTH: u32 = 5;
 const PASS: DirectPass = DirectPass::Fixed(16);
@@ -182,5 +185,48 @@ fn negative_controls_missing_or_doubled_direct_light_fail() {
     assert!(
         doubled > crit,
         "doubled direct light not detected: t {doubled}"
+    );
+}
+
+/// PSSMLT as the renderer runs it by default (`session::render`: the balanced direct pass of
+/// depth 2 with its pilot, large-step MIS, raster mutation) converges to BDPT.
+#[test]
+fn the_default_balanced_pass_converges_to_bdpt() {
+    let cancel = AtomicBool::new(false);
+    let images: Vec<Image> = (0..R as u64)
+        .map(|r| {
+            let settings = RenderSettings {
+                width: SIZE,
+                height: SIZE,
+                integrator: IntegratorKind::Pssmlt,
+                budget: Budget::SamplesPerPixel(64),
+                threads: 2,
+                seed: 44_000 + r,
+                max_depth: DEPTH,
+                mcmc: McmcSettings {
+                    chains: 64,
+                    bootstrap_samples: 20_000,
+                    ..McmcSettings::default()
+                },
+                ..RenderSettings::default()
+            };
+            let out = render(cornell(), &settings, &NoProgress, &cancel).unwrap();
+            assert!(
+                out.notes
+                    .iter()
+                    .any(|n| n.contains("balanced against the chains")),
+                "{:?}",
+                out.notes
+            );
+            assert_finite_non_negative(&out.image, "balanced pass replicate");
+            out.image
+        })
+        .collect();
+    against_reference(
+        "cornell PSSMLT, session default (balanced direct pass)",
+        &images,
+        reference(),
+        BLOCKS,
+        critical(),
     );
 }
