@@ -51,13 +51,14 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 use render::bdpt::BdptParams;
 use render::image::Image;
+use render::methods::{DrmltSettings, MethodSettings, MmltSettings, PssmltSettings};
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::{
     render_mlt, LargeStepMode, MltBudget, MltSettings, MmltTarget, PerChain, PssmltTarget,
     PATH_STREAMS,
 };
 use render::scene::Scene;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, NoProgress, RenderSettings};
 
 /// Command-line options.
 struct Options {
@@ -183,40 +184,26 @@ impl Method {
     }
 
     fn settings(self, size: u32, budget: Budget, seed: u64) -> RenderSettings {
-        // The plain estimator, no raster steps and no direct pass, as measured in
-        // docs/methods/drmlt.md (PSSMLT's defaults gained large-step MIS, raster steps and the
-        // direct-lighting pass later: issue 17; the DR kernels use none of them).
-        let mut mcmc = McmcSettings {
-            large_step_mis: Some(false),
-            raster: Some(pss::RasterParams::off()),
-            direct: Some(render::mlt::direct::DirectPass::Off),
-            ..McmcSettings::default()
-        };
-        let integrator = match self {
-            Method::Kelemen => IntegratorKind::Pssmlt,
+        // Kelemen's PSSMLT (the expected-value estimator, no raster steps, no direct pass),
+        // pbrt-v3's MMLT and the paper's DR kernels.
+        let method: MethodSettings = match self {
+            Method::Kelemen => PssmltSettings::kelemen2002().into(),
             Method::Gaussian(sigma) => {
-                mcmc.small_step = SmallMutation::Gaussian { sigma };
-                IntegratorKind::Pssmlt
+                let mut s = PssmltSettings::kelemen2002();
+                s.chain.small_step = SmallMutation::Gaussian { sigma };
+                s.into()
             }
-            Method::MmltKelemen => IntegratorKind::Mmlt,
-            Method::Dr(v, b) => {
-                mcmc.dr_variant = v;
-                mcmc.dr_on = b;
-                IntegratorKind::Drmlt
-            }
+            Method::MmltKelemen => MmltSettings::hachisuka2014().into(),
+            Method::Dr(v, b) => DrmltSettings::rioux_lavoie2020_with(v, b).into(),
         };
         RenderSettings {
             width: size,
             height: size,
-            integrator,
             budget,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             seed,
             max_depth: 5,
-            mcmc,
-            strategy_images: false,
-            roulette: None,
-            sampler: None,
+            method,
         }
     }
 }
@@ -229,14 +216,9 @@ struct Run {
     acceptance: f64,
 }
 
-/// The overall acceptance rate from the render's notes ("acceptance rate X over N mutations").
-fn acceptance(notes: &[String]) -> f64 {
-    notes
-        .iter()
-        .find_map(|n| n.strip_prefix("acceptance rate "))
-        .and_then(|t| t.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(f64::NAN)
+/// The overall acceptance rate of a Markov chain render.
+fn acceptance(out: &render::RenderOutput) -> f64 {
+    out.mcmc.as_ref().map_or(f64::NAN, |m| m.acceptance_rate())
 }
 
 fn run_once(
@@ -258,7 +240,7 @@ fn run_once(
         relmse: render::metrics::relmse(&out.image, reference).unwrap_or(f64::NAN),
         mad: render::metrics::mad(&out.image, reference).unwrap_or(f64::NAN),
         mutations_per_second: out.samples as f64 / out.elapsed.as_secs_f64(),
-        acceptance: acceptance(&out.notes),
+        acceptance: acceptance(&out),
     };
     (run, out.image, out.stage_map)
 }
@@ -266,9 +248,11 @@ fn run_once(
 /// Acceptance on a fixed mutation budget (16 per pixel, small bootstrap): load-independent.
 fn calibration_acceptance(scene: &Scene, method: Method, size: u32) -> f64 {
     let mut s = method.settings(size, Budget::SamplesPerPixel(16), 7);
-    s.mcmc.bootstrap_samples = 20_000;
+    if let Some(chain) = s.method.chain_mut() {
+        chain.bootstrap_samples = 20_000;
+    }
     let out = render(scene, &s, &NoProgress, &AtomicBool::new(false)).expect("render");
-    acceptance(&out.notes)
+    acceptance(&out)
 }
 
 /// Bisection on log sigma in [1e-4, 0.5] (acceptance decreases with sigma): the Gaussian

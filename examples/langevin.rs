@@ -33,10 +33,12 @@ use chainlight::report::{
     current_commit, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest, SeedImage,
 };
 use render::image::Image;
+use render::methods::{DrmltSettings, MalaSettings, MethodSettings, MmltSettings, PssmltSettings};
 use render::metrics::median_min_max;
 use render::mlt::dr::{DrBase, DrVariant};
+use render::mlt::mala::{MalaConfig, MalaVariant};
 use render::scene::Scene;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, IntegratorKind, NoProgress, RenderSettings};
 
 /// Command-line options.
 struct Options {
@@ -167,33 +169,37 @@ const METHODS: [(&str, &str, IntegratorKind, Option<DrVariant>, bool); 9] = [
 
 fn settings(method: usize, size: u32, budget: Budget, seed: u64) -> RenderSettings {
     let (_, _, integrator, dr, code_preset) = METHODS[method];
-    let mut mcmc = McmcSettings {
-        // No raster steps and no direct-lighting pass for PSSMLT/K, as measured in
-        // docs/methods/mala.md (PSSMLT's defaults gained them later: issue 17); the MALA
-        // variants and MMLT never use them.
-        raster: Some(pss::RasterParams::off()),
-        direct: Some(render::mlt::direct::DirectPass::Off),
-        ..McmcSettings::default()
+    let mala = if code_preset {
+        MalaSettings::luan2020_code()
+    } else {
+        MalaSettings::luan2020()
     };
-    if code_preset {
-        mcmc.mala.params = mcmc_core::langevin::LangevinParams::luan2020_code();
-    }
-    if let Some(v) = dr {
-        mcmc.dr_variant = v;
-        mcmc.dr_on = DrBase::Mmlt;
-    }
+    let method: MethodSettings = match (integrator, dr) {
+        // Kelemen's PSSMLT with large-step MIS, no raster steps, no direct pass.
+        (IntegratorKind::Pssmlt, _) => PssmltSettings::kelemen2002_mis().into(),
+        (IntegratorKind::Mmlt, _) => MmltSettings::hachisuka2014().into(),
+        (_, Some(variant)) => DrmltSettings {
+            mala: mala.config,
+            ..DrmltSettings::rioux_lavoie2020_with(variant, DrBase::Mmlt)
+        }
+        .into(),
+        (kind, None) => MalaSettings {
+            config: MalaConfig {
+                variant: kind.mala_variant().unwrap_or(MalaVariant::Hybrid),
+                ..mala.config
+            },
+            ..mala
+        }
+        .into(),
+    };
     RenderSettings {
         width: size,
         height: size,
-        integrator,
         budget,
         threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
         seed,
         max_depth: 5,
-        mcmc,
-        strategy_images: false,
-        roulette: None,
-        sampler: None,
+        method,
     }
 }
 
@@ -206,23 +212,13 @@ struct Run {
     seconds: f64,
 }
 
-/// The overall acceptance rate from the render's notes ("acceptance rate X over N mutations").
-fn acceptance(notes: &[String]) -> f64 {
-    notes
-        .iter()
-        .find_map(|n| n.strip_prefix("acceptance rate "))
-        .and_then(|t| t.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(f64::NAN)
-}
-
 fn run_once(scene: &Scene, reference: &Image, s: &RenderSettings) -> (Run, Image) {
     let out = render(scene, s, &NoProgress, &AtomicBool::new(false)).expect("render");
     let run = Run {
         mse: render::metrics::mse(&out.image, reference).unwrap_or(f64::NAN),
         relmse: render::metrics::relmse(&out.image, reference).unwrap_or(f64::NAN),
         mutations_per_second: out.samples as f64 / out.elapsed.as_secs_f64(),
-        acceptance: acceptance(&out.notes),
+        acceptance: out.mcmc.as_ref().map_or(f64::NAN, |m| m.acceptance_rate()),
         seconds: out.elapsed.as_secs_f64(),
     };
     (run, out.image)

@@ -39,7 +39,8 @@ use chainlight::report::{
 use lqmc::{torus_difference, Rank1Lattice, ShiftedLattice};
 use mcmc_core::seed::mix64;
 use render::image::Image;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::methods::{LqmcSettings, PssmltSettings, QmcSettings};
+use render::session::{render, Budget, NoProgress, RenderSettings};
 
 /// Command-line options.
 struct Options {
@@ -365,27 +366,17 @@ impl Method {
         RenderSettings {
             width: size,
             height: size,
-            integrator: match self {
-                Method::Qmc => IntegratorKind::Qmc,
-                Method::PssmltK => IntegratorKind::Pssmlt,
-                Method::Lqmc => IntegratorKind::Lqmc,
-            },
             budget,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             seed,
             max_depth: 5,
-            // The plain estimator, no raster steps and no direct pass, as measured in
-            // docs/methods/lqmc.md (PSSMLT's defaults gained large-step MIS, raster steps and
-            // the direct-lighting pass later: issue 17).
-            mcmc: McmcSettings {
-                large_step_mis: Some(false),
-                raster: Some(pss::RasterParams::off()),
-                direct: Some(render::mlt::direct::DirectPass::Off),
-                ..McmcSettings::default()
+            // The Halton baseline, Kelemen's PSSMLT (expected-value estimator, no raster
+            // steps, no direct pass) and the paper's LQMC.
+            method: match self {
+                Method::Qmc => QmcSettings::default().into(),
+                Method::PssmltK => PssmltSettings::kelemen2002().into(),
+                Method::Lqmc => LqmcSettings::tessari2020().into(),
             },
-            strategy_images: false,
-            roulette: None,
-            sampler: None,
         }
     }
 }

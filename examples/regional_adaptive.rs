@@ -50,11 +50,12 @@ use pathspace::PerturbationKind;
 use plotters::prelude::*;
 use render::image::Image;
 use render::image_io::{write_false_color, ErrorScale};
+use render::methods::PathMltSettings;
 use render::metrics::median_min_max;
 use render::mlt::pathmlt::{self, PathAdapt};
 use render::mlt::{LargeStepMode, MltBudget, MltSettings};
 use render::scene::Scene;
-use render::session::{McmcSettings, NoProgress};
+use render::session::NoProgress;
 
 /// Maximum path depth (bounces), as the references.
 const MAX_DEPTH: u32 = 5;
@@ -295,12 +296,12 @@ fn run_once(
     refinement: Refinement,
 ) -> RunOutput {
     let (kind, adapt) = CONFIGS[c];
-    let mcmc = McmcSettings::default();
+    let method = PathMltSettings::otsu2018(kind, adapt);
     let settings = MltSettings {
         width: reference.width,
         height: reference.height,
-        chains: mcmc.chains,
-        bootstrap_samples: mcmc.bootstrap_samples,
+        chains: method.chains,
+        bootstrap_samples: method.bootstrap_samples,
         budget,
         large_step: LargeStepMode::Fixed(0.0),
         seed,

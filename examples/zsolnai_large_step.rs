@@ -24,8 +24,9 @@ use chainlight::report::{
     SeedImage,
 };
 use render::image::Image;
+use render::methods::{ChainSettings, PssmltSettings};
 use render::mlt::LargeStepMode;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, NoProgress, RenderSettings};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -182,25 +183,21 @@ fn main() {
             let settings = RenderSettings {
                 width: size,
                 height: size,
-                integrator: IntegratorKind::Pssmlt,
                 budget: Budget::SamplesPerPixel(mpp.max(1)),
                 threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
                 seed,
                 max_depth: 5,
-                mcmc: McmcSettings {
-                    large_step,
-                    bootstrap_samples: 20_000,
-                    // The plain estimator, no raster steps and no direct pass, as measured in
-                    // docs/methods/large-step-control.md (PSSMLT's defaults gained large-step
-                    // MIS, raster steps and the direct-lighting pass later: issue 17).
-                    large_step_mis: Some(false),
-                    raster: Some(pss::RasterParams::off()),
-                    direct: Some(render::mlt::direct::DirectPass::Off),
-                    ..McmcSettings::default()
-                },
-                strategy_images: false,
-                roulette: None,
-                sampler: None,
+                // Kelemen et al. 2002's PSSMLT (the expected-value estimator, no raster steps,
+                // no direct pass), with the large-step probability under test.
+                method: PssmltSettings {
+                    chain: ChainSettings {
+                        large_step,
+                        bootstrap_samples: 20_000,
+                        ..ChainSettings::kelemen2002()
+                    },
+                    ..PssmltSettings::kelemen2002()
+                }
+                .into(),
             };
             let start = std::time::Instant::now();
             let out =
@@ -222,15 +219,8 @@ fn main() {
             let (out, secs) = run(auto_mode, 100 + r);
             autos.push(render::metrics::relmse(&out.image, &reference).unwrap_or(f64::NAN));
             if r == 0 {
-                if let Some(note) = out.notes.iter().find(|n| n.starts_with("automatic")) {
-                    let grab = |key: &str| -> f64 {
-                        note.split(key)
-                            .nth(1)
-                            .and_then(|t| t.trim_start_matches([' ', '=']).split([',', ' ']).next())
-                            .and_then(|v| v.parse().ok())
-                            .unwrap_or(f64::NAN)
-                    };
-                    etas = (grab("eta_s"), grab("eta_l"), grab("eta_0"), grab("p_large"));
+                if let Some(e) = out.mcmc.as_ref().and_then(|m| m.large_step) {
+                    etas = (e.eta_s, e.eta_l, e.eta_0, e.large_step_probability);
                 }
             }
             auto_images.push((100 + r, out.image, secs));

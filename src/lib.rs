@@ -14,14 +14,20 @@
 //! ```
 //! use std::sync::atomic::AtomicBool;
 //!
-//! use chainlight::render::{render, Budget, IntegratorKind, NoProgress, RenderSettings, Scene};
+//! use chainlight::render::methods::PssmltSettings;
+//! use chainlight::render::{render, Budget, NoProgress, RenderSettings, Scene};
 //!
+//! // Kelemen et al. 2002's PSSMLT, a paper preset, with 16 chains.
 //! let settings = RenderSettings {
 //!     width: 8,
 //!     height: 8,
-//!     integrator: IntegratorKind::Pt,
+//!     method: PssmltSettings::kelemen2002().into(),
 //!     budget: Budget::SamplesPerPixel(4),
 //!     ..RenderSettings::default()
+//! };
+//! let settings = RenderSettings {
+//!     method: settings.method.with_chains(16, 10_000),
+//!     ..settings
 //! };
 //! let out = render(&Scene::cornell_box(8, 8), &settings, &NoProgress, &AtomicBool::new(false))
 //!     .unwrap();

@@ -1,11 +1,11 @@
 //! `--integrator` values: clap's view of the renderer's integrator table
-//! ([`render::integrator::INTEGRATORS`]), so names, help lines and tests come from one place.
+//! ([`render::INTEGRATORS`]), so names, help lines and tests come from one place.
 
 use std::sync::OnceLock;
 
 use clap::builder::PossibleValue;
 use clap::ValueEnum;
-use render::integrator::{IntegratorInfo, INTEGRATORS};
+use render::{IntegratorInfo, INTEGRATORS};
 
 /// One `--integrator` choice: a row of the integrator table.
 #[derive(Clone, Copy, Debug)]

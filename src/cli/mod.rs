@@ -2,6 +2,7 @@
 
 mod compare_cmd;
 mod integrator;
+mod method_flags;
 mod parse;
 mod progress;
 mod render_cmd;

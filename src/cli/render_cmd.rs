@@ -5,16 +5,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use clap::Args;
-use pss::SmallMutation;
 use render::image_io;
-use render::integrator::{IntegratorKind, INTEGRATORS};
 use render::light::EnvironmentLight;
-use render::mlt::dr::{DrBase, DrVariant};
-use render::mlt::LargeStepMode;
 use render::scene::{LoadOptions, Scene};
-use render::session::{self, Budget, McmcSettings, RenderOutput, RenderSettings};
+use render::session::{self, Budget, RenderOutput, RenderSettings};
+use render::{IntegratorKind, INTEGRATORS};
 
 use super::integrator::IntegratorChoice;
+use super::method_flags::MethodFlags;
 use super::progress::BarProgress;
 use super::{parse, CliResult};
 
@@ -75,120 +73,12 @@ pub(crate) struct RenderArgs {
     /// Output OpenEXR file; a tonemapped PNG preview is written next to it (same stem, .png).
     #[arg(short, long, value_name = "OUT.exr", default_value = "chainlight.exr")]
     output: PathBuf,
-    /// MCMC integrators: the large-step probability, `auto` (Zsolnai & Szirmay-Kalos 2013:
-    /// estimated from the first mutations of every chain) or a number in 0..=1.
-    #[arg(long, value_name = "auto|P", default_value = "0.3", value_parser = parse::large_step)]
-    large_step: LargeStepMode,
-    /// pssmlt, mmlt: `on` combines the large-step samples with the Metropolis estimator by
-    /// multiple importance sampling (Kelemen et al. 2002, section 4; LuxCore's METROPOLIS
-    /// sampler), `off` uses the plain expected-value estimator [default: on for pssmlt, off
-    /// for mmlt].
-    #[arg(long, value_name = "on|off", value_parser = parse::on_off,
-          action = clap::ArgAction::Set)]
-    large_step_mis: Option<bool>,
-    /// pssmlt, mmlt: raster (image-plane) mutation after LuxCore's: with probability P a small
-    /// step moves only the two raster numbers, by 1 pixel to 10% of the image (Kelemen-style,
-    /// log-uniform per axis); `on` is P = 0.5 [default: on for pssmlt, off for mmlt].
-    #[arg(long, value_name = "off|on|P", value_parser = parse::raster_mutation)]
-    raster_mutation: Option<f64>,
-    /// mmlt: how chains are spread over path depths, `joint` (pbrt's resampling over all
-    /// depths) or `per-depth` (a fixed count per depth, proportional to its bootstrap
-    /// estimate, splats scaled by b_d / n_d).
-    #[arg(long, value_name = "joint|per-depth", default_value = "joint", value_parser = parse::chain_allocation)]
-    chain_allocation: mcmc_core::render_loop::ChainAllocation,
-    /// mmlt: `on` stratifies the bootstrap over strategies (every primary point evaluated
-    /// under all strategies of its depth).
-    #[arg(long, value_name = "on|off", default_value = "off", value_parser = parse::on_off,
-          action = clap::ArgAction::Set)]
-    strategy_strata: bool,
-    /// mmlt: estimate each depth's normalisation from N all-strategy BDPT samples instead of
-    /// the bootstrap (0: the bootstrap's), 0..=100000000.
-    #[arg(long, value_name = "N", default_value_t = 0,
-          value_parser = clap::value_parser!(u64).range(0..=100_000_000))]
-    bdpt_normalization: u64,
-    /// pssmlt: a separate direct-lighting pass (Mitsuba 0.6's `directSamples`): BDPT renders
-    /// path depths 0..=K (--direct-depth) at N samples per pixel first (under --time at most a
-    /// quarter of the time), the chains only deeper paths; 0..=65536, 0 = off [default for
-    /// pssmlt: --direct-share auto].
-    #[arg(long, value_name = "N", conflicts_with = "direct_share",
-          value_parser = clap::value_parser!(u32).range(0..=65_536))]
-    direct_samples: Option<u32>,
-    /// pssmlt: the direct pass's share of the budget: `auto` picks it per scene from a pilot
-    /// of 16384 BDPT samples (how much of the light the pass's depths carry; about 25 % of the
-    /// time on cornell-glass, 10 % on ajar-door), or a share in 0.01..=0.9 of --time (under
-    /// --spp the samples per mutation that cost as much) [default: auto].
-    #[arg(long, value_name = "auto|S", value_parser = parse::direct_share)]
-    direct_share: Option<render::mlt::direct::DirectPass>,
-    /// pssmlt: the direct pass's depth K, 1..=64: BDPT renders paths of up to K bounces, the
-    /// chains the deeper ones (1: direct light only; no pass if K >= --max-depth).
-    #[arg(long, value_name = "K", default_value_t = render::mlt::direct::DIRECT_DEPTH_DEFAULT,
-          value_parser = clap::value_parser!(u32).range(1..=64))]
-    direct_depth: u32,
-    /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
-    /// al. 2002), `kelemen=S1,S2` (0 < S1 < S2 <= 0.5) or `gaussian=SIGMA` with SIGMA in
-    /// (0, 10] (pbrt-v3 uses gaussian=0.01).
-    #[arg(long, value_name = "kelemen|kelemen=S1,S2|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]
-    small_step: SmallMutation,
-    /// MCMC integrators: number of Markov chains, 1..=1000000.
-    #[arg(long, value_name = "N", default_value_t = 256,
-          value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-    chains: u32,
-    /// MCMC integrators: independent samples in the bootstrap that estimates the
-    /// normalisation and seeds the chains, 1..=100000000.
-    #[arg(long, value_name = "N", default_value_t = 100_000,
-          value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
-    bootstrap_samples: u32,
-    /// pt (and qmc), bdpt, pssmlt (and drmlt over it): Russian roulette, `off`, or `N` (from N
-    /// bounces on, 0..=1024; pt: continue with probability min(1, max beta) after every bounce
-    /// beyond the N-th; bdpt: min(0.95, f cos / pdf of the last bounce)) [default: 5 for pt,
-    /// 3 otherwise]. MMLT-based integrators never use roulette.
-    #[arg(long, value_name = "off|N", value_parser = parse::roulette)]
-    roulette: Option<render::bdpt::Roulette>,
-    /// pt and bdpt: the per-pixel sampler, `independent` or `sobol` (Owen-scrambled Sobol
-    /// points, stratified per pixel); pssmlt: its direct-lighting pass's [default: sobol].
-    /// Other integrators own their numbers.
-    #[arg(long, value_name = "independent|sobol")]
-    sampler: Option<render::sampler::SamplerKind>,
-    /// BDPT only: also write the MIS-weighted image of every strategy (s, t) next to the
-    /// output, as `<stem>_s<S>_t<T>.exr`.
-    #[arg(long)]
-    strategy_images: bool,
+    /// The method's own flags.
+    #[command(flatten)]
+    method: MethodFlags,
     /// Exposure of the PNG preview in stops, -64..=64 (the EXR is never scaled).
     #[arg(long, allow_negative_numbers = true, value_name = "STOPS", default_value = "0", value_parser = parse::stops)]
     exposure: f32,
-    /// drmlt: the second-stage rule, `tierney-mira`, `green-mira`, `orbital` (the paper's
-    /// recommendation) or `cheap-then-expensive` (Gaussian first stage, MALA second stage,
-    /// Green-Mira; on MMLT).
-    #[arg(long, value_name = "RULE", default_value = "orbital", value_parser = parse::dr_variant)]
-    dr_variant: DrVariant,
-    /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).
-    #[arg(long, value_name = "pssmlt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
-    dr_on: DrBase,
-    /// pathmlt: the perturbation mixed with the bidirectional mutation (0.5 each, RA paper
-    /// section 8.1), `lens` or `multichain`.
-    #[arg(long, value_name = "lens|multichain", default_value = "lens", value_parser = parse::perturbation)]
-    perturbation: pathspace::PerturbationKind,
-    /// pathmlt: how the perturbation's angular scale is adapted (Otsu et al. 2018): `fixed`
-    /// (0.02 rad), `global` (one adapted scale), `grid` (per cell of a 20 x 20 screen grid;
-    /// multichain: x a 50 x 50 direction grid per cell) or `quadtree` (a refined screen
-    /// quadtree; multichain: a direction quadtree per cell of the 20 x 20 screen grid).
-    #[arg(long, value_name = "fixed|global|grid|quadtree", default_value = "fixed", value_parser = parse::adapt)]
-    adapt: render::mlt::pathmlt::PathAdapt,
-    /// mala*: parameter preset, `paper` (Luan et al. 2020, section 7: epsilon 0.01, K 30,
-    /// H 10000) or `code` (the authors' code: epsilon 0.005, K 5, H 3000, preconditioner
-    /// clamped to [0.01, 100], shrink prior 0.005).
-    #[arg(long, value_name = "paper|code", default_value = "paper", value_parser = parse::mala_preset)]
-    mala_preset: mcmc_core::langevin::LangevinParams,
-    /// mala*: chains of MMLT depth up to D run MALA, deeper ones the Kelemen small step,
-    /// 0..=1024.
-    #[arg(long, allow_negative_numbers = true, value_name = "D", default_value_t = 3,
-          value_parser = clap::value_parser!(u32).range(0..=1024))]
-    mala_max_depth: u32,
-    /// mala*: gradient of the log contribution, `dual` (forward-mode dual numbers through the
-    /// differentiable path evaluator; finite differences where it does not apply) or `fd`
-    /// (central finite differences of the f32 renderer).
-    #[arg(long, value_name = "dual|fd", default_value = "dual", value_parser = parse::mala_gradient)]
-    mala_gradient: render::mlt::mala::GradientMethod,
     /// Environment light: `none`, a radiance `R,G,B` or grey `V` (each in 0..=1e6), or an
     /// equirectangular map (.exr, .hdr, .pfm; +Y up, image centre towards -Z) [default: the
     /// scene's lights; a scene without any light gets a uniform environment of radiance 1].
@@ -279,7 +169,7 @@ fn probe_writable(path: &Path, what: &str) -> CliResult<()> {
 }
 
 /// Builds the session settings from validated flags.
-fn settings(args: &RenderArgs) -> RenderSettings {
+fn settings(args: &RenderArgs) -> CliResult<RenderSettings> {
     let budget = match args.time {
         Some(time) => Budget::Time(time),
         None => Budget::SamplesPerPixel(args.spp.unwrap_or(DEFAULT_SPP)),
@@ -288,58 +178,21 @@ fn settings(args: &RenderArgs) -> RenderSettings {
         || std::thread::available_parallelism().map_or(1, |n| n.get()),
         usize::from,
     );
-    RenderSettings {
+    Ok(RenderSettings {
         width: args.width,
         height: args.height,
-        integrator: args.integrator.info.kind,
         budget,
         threads,
         seed: args.seed,
         max_depth: args.max_depth,
-        mcmc: McmcSettings {
-            large_step: match args.large_step {
-                LargeStepMode::Auto { initial, .. } => LargeStepMode::Auto {
-                    initial,
-                    estimation_steps: session::AUTO_LARGE_STEP_ESTIMATION,
-                },
-                fixed => fixed,
-            },
-            chains: args.chains as usize,
-            bootstrap_samples: args.bootstrap_samples as usize,
-            small_step: args.small_step,
-            dr_variant: args.dr_variant,
-            dr_on: args.dr_on,
-            mala: render::mlt::mala::MalaConfig {
-                params: args.mala_preset,
-                max_depth: args.mala_max_depth,
-                gradient: args.mala_gradient,
-                ..render::mlt::mala::MalaConfig::default()
-            },
-            perturbation: args.perturbation,
-            adapt: args.adapt,
-            large_step_mis: args.large_step_mis,
-            raster: args
-                .raster_mutation
-                .map(pss::RasterParams::with_probability),
-            mmlt_chain_allocation: args.chain_allocation,
-            mmlt_strategy_strata: args.strategy_strata,
-            mmlt_bdpt_normalization: args.bdpt_normalization,
-            direct: args
-                .direct_samples
-                .map(render::mlt::direct::DirectPass::Fixed)
-                .or(args.direct_share),
-            direct_depth: Some(args.direct_depth),
-        },
-        strategy_images: args.strategy_images,
-        roulette: args.roulette,
-        sampler: args.sampler,
-    }
+        method: args.method.settings(args.integrator.info.kind)?,
+    })
 }
 
 /// Renders, writes the EXR and the PNG preview, prints a summary.
 pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
     let png_path = check_paths(&args)?;
-    let settings = settings(&args);
+    let settings = settings(&args)?;
 
     let mut scene = match &args.scene {
         None => Scene::cornell_box(settings.width, settings.height),
@@ -402,7 +255,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
     for note in &output.notes {
         eprintln!("note: {note}");
     }
-    if args.strategy_images && settings.integrator != IntegratorKind::Bdpt {
+    if args.method.strategy_images && settings.integrator() != IntegratorKind::Bdpt {
         eprintln!("warning: --strategy-images applies to --integrator bdpt only; ignored");
     }
     for ((s, t), img) in &output.strategy_images {

@@ -58,14 +58,13 @@ fn pt_cornell(c: &mut Criterion) {
     // creating the thread pool is amortised).
     group.throughput(Throughput::Elements(128 * 128 * 4));
     let settings = RenderSettings {
+        method: IntegratorKind::Pt.settings(),
         width: 128,
         height: 128,
-        integrator: IntegratorKind::Pt,
         budget: Budget::SamplesPerPixel(4),
         threads: 2,
         seed: 0,
         max_depth: 5,
-        ..RenderSettings::default()
     };
     let cancel = AtomicBool::new(false);
     group.bench_function("render_session_2_threads", |b| {

@@ -11,7 +11,8 @@
 //!
 //! | layer | modules |
 //! |---|---|
-//! | entry point | [`session`]: settings, validation, dispatch to a driver |
+//! | entry point | [`session`]: common settings, validation, the method's render function |
+//! | methods | [`methods`]: one module per integrator family (settings, paper presets, render function), the integrator table |
 //! | drivers | [`integrator::pt_driver`], [`bdpt::render_bdpt`], [`mlt`] |
 //! | integrators | [`integrator::pt`], [`bdpt`] (subpaths, connections, MIS) |
 //! | scene | [`scene`], [`camera`], [`light`], [`material`], [`bvh`], [`mesh`] |
@@ -21,12 +22,13 @@
 //! ```
 //! use std::sync::atomic::AtomicBool;
 //!
-//! use render::{render, Budget, IntegratorKind, NoProgress, RenderSettings, Scene};
+//! use render::methods::BdptSettings;
+//! use render::{render, Budget, NoProgress, RenderSettings, Scene};
 //!
 //! let settings = RenderSettings {
 //!     width: 16,
 //!     height: 16,
-//!     integrator: IntegratorKind::Bdpt,
+//!     method: BdptSettings::default().into(),
 //!     budget: Budget::SamplesPerPixel(2),
 //!     ..RenderSettings::default()
 //! };
@@ -51,6 +53,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod mesh;
+pub mod methods;
 pub mod metrics;
 pub mod mlt;
 pub mod pathspace_scene;
@@ -69,12 +72,13 @@ pub use film::{Film, FilmTile, Filter};
 /// The vector maths crate of the public API (positions, colours), re-exported.
 pub use glam;
 pub use image::Image;
-pub use integrator::pt_driver::{render_pt, PtOutput, PtSettings};
-pub use integrator::{IntegratorInfo, IntegratorKind, INTEGRATORS};
+pub use integrator::pt_driver::{render_pt, PtDriverSettings, PtOutput};
 pub use material::{Bsdf, TransportMode};
 pub use mesh::Mesh;
+pub use methods::{
+    IntegratorInfo, IntegratorKind, McmcStats, Method, MethodSettings, RenderOutput,
+    RenderSettings, INTEGRATORS,
+};
 pub use sampler::{IndependentSampler, Sampler, Stream};
 pub use scene::{CameraSpec, Material, Scene};
-pub use session::{
-    render, render_cornell_box, McmcSettings, NoProgress, Progress, RenderOutput, RenderSettings,
-};
+pub use session::{render, render_cornell_box, NoProgress, Progress};

@@ -19,6 +19,7 @@ use std::sync::atomic::AtomicBool;
 
 use glam::{Mat4, Vec3, Vec3A};
 use render::bdpt::Roulette;
+use render::methods::PtSettings;
 use render::sampler::SamplerKind;
 use render::scene::{CameraSpec, Material, Mesh, Scene};
 use render::session::{render, Budget, IntegratorKind, NoProgress, RenderSettings};
@@ -60,17 +61,19 @@ fn check_with(
     sampler: Option<SamplerKind>,
     roulette: Option<Roulette>,
 ) -> Result<(), String> {
+    let defaults = PtSettings::default();
     let settings = RenderSettings {
+        method: PtSettings {
+            sampler: sampler.unwrap_or(defaults.sampler),
+            roulette: roulette.map_or(defaults.roulette, |r| r.start),
+        }
+        .into(),
         width: SIZE,
         height: SIZE,
-        integrator: IntegratorKind::Pt,
         budget: Budget::SamplesPerPixel(spp),
         threads: 2,
         seed: 42,
         max_depth,
-        sampler,
-        roulette,
-        ..RenderSettings::default()
     };
     let out = render(scene, &settings, &NoProgress, &AtomicBool::new(false)).unwrap();
     assert_eq!(out.dropped_nonfinite, 0);
@@ -155,14 +158,13 @@ fn depth_zero_is_exactly_le() {
     let le = Vec3::new(0.25, 0.5, 1.0);
     let scene = furnace_box(Vec3::splat(0.5), le);
     let settings = RenderSettings {
+        method: IntegratorKind::Pt.settings(),
         width: 8,
         height: 8,
-        integrator: IntegratorKind::Pt,
         budget: Budget::SamplesPerPixel(2),
         threads: 1,
         seed: 1,
         max_depth: 0,
-        ..RenderSettings::default()
     };
     let out = render(&scene, &settings, &NoProgress, &AtomicBool::new(false)).unwrap();
     for px in &out.image.pixels {

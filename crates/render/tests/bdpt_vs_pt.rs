@@ -21,14 +21,13 @@ fn replicates(
     (0..R)
         .map(|r| {
             let settings = RenderSettings {
+                method: integrator.settings(),
                 width: size,
                 height: size,
-                integrator,
                 budget: Budget::SamplesPerPixel(spp),
                 threads: 2,
                 seed: 1000 + r as u64 * 7 + integrator as u64 * 100,
                 max_depth,
-                ..RenderSettings::default()
             };
             render(scene, &settings, &NoProgress, &AtomicBool::new(false))
                 .expect("render")
@@ -128,14 +127,13 @@ fn pt_and_bdpt_match_the_analytic_enclosure() {
     let exact = common::enclosure_radiance(4);
     for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt] {
         let settings = RenderSettings {
+            method: integrator.settings(),
             width: size,
             height: size,
-            integrator,
             budget: Budget::SamplesPerPixel(16),
             threads: 2,
             seed: 3,
             max_depth: 4,
-            ..RenderSettings::default()
         };
         let img = render(&scene, &settings, &NoProgress, &AtomicBool::new(false))
             .unwrap()

@@ -9,9 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use render::scene::Scene;
-use render::session::{
-    render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderOutput, RenderSettings,
-};
+use render::session::{render, Budget, IntegratorKind, NoProgress, RenderOutput, RenderSettings};
 
 /// Image side: 4 PT tiles, 8 BDPT bands of 4 rows.
 const SIZE: u32 = 32;
@@ -32,18 +30,11 @@ fn settings(integrator: IntegratorKind, spp: u32, seed: u64) -> RenderSettings {
     RenderSettings {
         width: SIZE,
         height: SIZE,
-        integrator,
         budget: Budget::SamplesPerPixel(spp),
         threads: 2,
         seed,
         max_depth: 5,
-        mcmc: McmcSettings {
-            // A short bootstrap (the test waits for its end before the 200 ms start).
-            bootstrap_samples: 10_000,
-            chains: 64,
-            ..McmcSettings::default()
-        },
-        ..RenderSettings::default()
+        method: integrator.settings().with_chains(64, 10_000),
     }
 }
 
@@ -73,14 +64,14 @@ fn cancelled_render(scene: &Scene, integrator: IntegratorKind) -> (RenderOutput,
     // PSSMLT's direct-lighting pass (on by default) renders before the bootstrap and reports
     // its pixel samples as progress too.
     let direct_units = if integrator == IntegratorKind::Pssmlt {
-        let pass = render::session::direct_pass_default(integrator);
+        let pass = render::methods::PssmltSettings::default().direct;
         let (spp, _) = pass.budget(Some(1_000_000.0), None);
         u64::from(spp.unwrap_or(0)) * u64::from(SIZE * SIZE)
     } else {
         0
     };
     let warm_up = if integrator.is_mcmc() {
-        settings.mcmc.bootstrap_samples as u64 * targets + direct_units
+        10_000 * targets + direct_units
     } else {
         0
     };

@@ -7,25 +7,31 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use render::image::Image;
-use render::integrator::INTEGRATORS;
+use render::methods::{DrmltSettings, MethodSettings, MmltSettings, PssmltSettings};
 use render::scene::Scene;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, NoProgress, RenderSettings};
+use render::{IntegratorKind, INTEGRATORS};
 
 fn settings(width: u32, height: u32, threads: usize, seed: u64) -> RenderSettings {
+    with_method(IntegratorKind::Pt.settings(), width, height, threads, seed)
+}
+
+/// `method` with 16 chains and a bootstrap of 5000 samples (Markov chain methods).
+fn with_method(
+    method: MethodSettings,
+    width: u32,
+    height: u32,
+    threads: usize,
+    seed: u64,
+) -> RenderSettings {
     RenderSettings {
         width,
         height,
-        integrator: IntegratorKind::Pt,
         budget: Budget::SamplesPerPixel(3),
         threads,
         seed,
         max_depth: 6,
-        mcmc: McmcSettings {
-            bootstrap_samples: 5_000,
-            chains: 16,
-            ..McmcSettings::default()
-        },
-        ..RenderSettings::default()
+        method: method.with_chains(16, 5_000),
     }
 }
 
@@ -36,7 +42,7 @@ fn bits(image: &Image) -> Vec<[u32; 3]> {
 fn run(scene: &Scene, s: &RenderSettings) -> Image {
     let out = render(scene, s, &NoProgress, &AtomicBool::new(false)).unwrap();
     assert!(!out.cancelled);
-    if !s.integrator.is_mcmc() {
+    if !s.integrator().is_mcmc() {
         assert_eq!(out.samples, u64::from(s.width * s.height) * 3);
     }
     out.image
@@ -47,10 +53,7 @@ fn same_seed_any_thread_count_is_bit_identical() {
     // 40 x 20 is not a multiple of PT's 16-pixel tiles nor of BDPT's 8 bands.
     let scene = Scene::cornell_box(40, 20);
     for info in INTEGRATORS {
-        let with = |threads| RenderSettings {
-            integrator: info.kind,
-            ..settings(40, 20, threads, 7)
-        };
+        let with = |threads| with_method(info.kind.settings(), 40, 20, threads, 7);
         let reference = run(&scene, &with(1));
         assert!(reference.mean_luminance() > 0.0, "{}: black", info.name);
         for threads in [2, 3] {
@@ -70,11 +73,11 @@ fn same_seed_any_thread_count_is_bit_identical() {
 fn drmlt_cheap_then_expensive_is_bit_identical() {
     let scene = Scene::cornell_box(24, 16);
     let with = |threads| {
-        let mut s = settings(24, 16, threads, 11);
-        s.integrator = IntegratorKind::Drmlt;
-        s.mcmc.dr_variant = render::mlt::dr::DrVariant::CheapThenExpensive;
-        s.mcmc.dr_on = render::mlt::dr::DrBase::Mmlt;
-        s
+        let method = DrmltSettings::rioux_lavoie2020_with(
+            render::mlt::dr::DrVariant::CheapThenExpensive,
+            render::mlt::dr::DrBase::Mmlt,
+        );
+        with_method(method.into(), 24, 16, threads, 11)
     };
     let reference = run(&scene, &with(1));
     assert!(reference.mean_luminance() > 0.0);
@@ -90,6 +93,17 @@ fn drmlt_cheap_then_expensive_is_bit_identical() {
 fn large_step_mis_is_bit_identical() {
     let scene = Scene::cornell_box(24, 16);
     for integrator in [IntegratorKind::Pssmlt, IntegratorKind::Mmlt] {
+        let method = |large_step| -> MethodSettings {
+            if integrator == IntegratorKind::Pssmlt {
+                let mut s = PssmltSettings::default();
+                (s.chain.large_step, s.large_step_mis) = (large_step, true);
+                s.into()
+            } else {
+                let mut s = MmltSettings::default();
+                (s.chain.large_step, s.large_step_mis) = (large_step, true);
+                s.into()
+            }
+        };
         for large_step in [
             render::mlt::LargeStepMode::Fixed(0.3),
             render::mlt::LargeStepMode::Auto {
@@ -97,13 +111,7 @@ fn large_step_mis_is_bit_identical() {
                 estimation_steps: 10,
             },
         ] {
-            let with = |threads| {
-                let mut s = settings(24, 16, threads, 13);
-                s.integrator = integrator;
-                s.mcmc.large_step = large_step;
-                s.mcmc.large_step_mis = Some(true);
-                s
-            };
+            let with = |threads| with_method(method(large_step), 24, 16, threads, 13);
             let reference = run(&scene, &with(1));
             assert!(reference.mean_luminance() > 0.0);
             for threads in [2, 3] {

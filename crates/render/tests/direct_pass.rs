@@ -31,7 +31,7 @@ use render::mlt::{
 };
 use render::sampler::SamplerKind;
 use render::scene::Scene;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, IntegratorKind, NoProgress, RenderSettings};
 
 const ALPHA_FAMILY: f64 = 0.001;
 const R: usize = 16;
@@ -198,17 +198,11 @@ fn the_default_balanced_pass_converges_to_bdpt() {
             let settings = RenderSettings {
                 width: SIZE,
                 height: SIZE,
-                integrator: IntegratorKind::Pssmlt,
                 budget: Budget::SamplesPerPixel(64),
                 threads: 2,
                 seed: 44_000 + r,
                 max_depth: DEPTH,
-                mcmc: McmcSettings {
-                    chains: 64,
-                    bootstrap_samples: 20_000,
-                    ..McmcSettings::default()
-                },
-                ..RenderSettings::default()
+                method: IntegratorKind::Pssmlt.settings().with_chains(64, 20_000),
             };
             let out = render(cornell(), &settings, &NoProgress, &cancel).unwrap();
             assert!(

@@ -23,7 +23,7 @@ use std::time::Instant;
 
 use glam::Vec2;
 use render::scene::Scene;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, IntegratorKind, NoProgress, RenderSettings};
 
 /// Image side in pixels.
 const SIZE: u32 = 32;
@@ -59,7 +59,6 @@ fn settings(integrator: IntegratorKind) -> RenderSettings {
     RenderSettings {
         width: SIZE,
         height: SIZE,
-        integrator,
         budget: Budget::SamplesPerPixel(if integrator.is_mcmc() {
             MLT_MPP
         } else {
@@ -68,12 +67,7 @@ fn settings(integrator: IntegratorKind) -> RenderSettings {
         threads: 1,
         seed: 1,
         max_depth: 5,
-        mcmc: McmcSettings {
-            bootstrap_samples: 4_000,
-            chains: 16,
-            ..McmcSettings::default()
-        },
-        ..RenderSettings::default()
+        method: integrator.settings().with_chains(16, 4_000),
     }
 }
 

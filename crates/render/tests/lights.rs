@@ -20,7 +20,7 @@ use mcmc_core::testing::chi_square::{chi_square_test, MIN_EXPECTED};
 use render::image::Image;
 use render::light::{EnvironmentLight, PunctualLight};
 use render::scene::{CameraSpec, Material, Mesh, Scene};
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, IntegratorKind, NoProgress, RenderSettings};
 use render::warp::{sample_uniform_sphere, uniform_sphere_pdf};
 
 /// Replicates per integrator.
@@ -49,17 +49,11 @@ fn settings(
     RenderSettings {
         width: size,
         height: size,
-        integrator: kind,
         budget: Budget::SamplesPerPixel(spp),
         threads: 2,
         seed,
         max_depth,
-        mcmc: McmcSettings {
-            chains: 64,
-            bootstrap_samples: 20_000,
-            ..McmcSettings::default()
-        },
-        ..RenderSettings::default()
+        method: kind.settings().with_chains(64, 20_000),
     }
 }
 

@@ -31,7 +31,7 @@ use render::bdpt::{render_bdpt, BdptParams};
 use render::budget::Budget;
 use render::image::Image;
 use render::integrator::lqmc::{render_lqmc, LqmcParams};
-use render::integrator::pt_driver::PtSettings;
+use render::integrator::pt_driver::PtDriverSettings;
 use render::integrator::qmc::{render_qmc, render_qmc_with};
 use render::scene::Scene;
 use render::session::{render, IntegratorKind, NoProgress, RenderSettings};
@@ -88,8 +88,8 @@ fn name(method: Method) -> &'static str {
     }
 }
 
-fn pt_settings(scene: &Scene, spp: u32, max_depth: u32, seed: u64) -> PtSettings {
-    PtSettings {
+fn pt_settings(scene: &Scene, spp: u32, max_depth: u32, seed: u64) -> PtDriverSettings {
+    PtDriverSettings {
         width: scene.camera().width(),
         height: scene.camera().height(),
         max_depth,
@@ -329,14 +329,13 @@ fn same_seed_one_and_two_threads_are_bit_identical() {
     for integrator in [IntegratorKind::Qmc, IntegratorKind::Lqmc] {
         let run = |threads| {
             let settings = RenderSettings {
+                method: integrator.settings(),
                 width: 40,
                 height: 24,
-                integrator,
                 budget: Budget::SamplesPerPixel(2),
                 threads,
                 seed: 5,
                 max_depth: 5,
-                ..RenderSettings::default()
             };
             let out = render(&scene, &settings, &NoProgress, &AtomicBool::new(false)).unwrap();
             out.image
@@ -350,14 +349,13 @@ fn same_seed_one_and_two_threads_are_bit_identical() {
         // Negative control: another seed changes the bits.
         let other = {
             let settings = RenderSettings {
+                method: integrator.settings(),
                 width: 40,
                 height: 24,
-                integrator,
                 budget: Budget::SamplesPerPixel(2),
                 threads: 2,
                 seed: 6,
                 max_depth: 5,
-                ..RenderSettings::default()
             };
             render(&scene, &settings, &NoProgress, &AtomicBool::new(false))
                 .unwrap()
@@ -381,7 +379,7 @@ fn bad_settings_are_errors_naming_the_flag() {
         for (settings, flag) in [
             (
                 RenderSettings {
-                    integrator,
+                    method: integrator.settings(),
                     budget: Budget::SamplesPerPixel(0),
                     ..RenderSettings::default()
                 },
@@ -389,7 +387,7 @@ fn bad_settings_are_errors_naming_the_flag() {
             ),
             (
                 RenderSettings {
-                    integrator,
+                    method: integrator.settings(),
                     width: 0,
                     ..RenderSettings::default()
                 },
@@ -397,7 +395,7 @@ fn bad_settings_are_errors_naming_the_flag() {
             ),
             (
                 RenderSettings {
-                    integrator,
+                    method: integrator.settings(),
                     threads: 0,
                     ..RenderSettings::default()
                 },
@@ -409,7 +407,7 @@ fn bad_settings_are_errors_naming_the_flag() {
         }
         // Negative control: valid settings render.
         let ok = RenderSettings {
-            integrator,
+            method: integrator.settings(),
             width: 8,
             height: 8,
             budget: Budget::SamplesPerPixel(1),

@@ -913,14 +913,13 @@ fn every_integrator_renders_the_features_finitely() {
         IntegratorKind::Mmlt,
     ] {
         let settings = RenderSettings {
+            method: integrator.settings(),
             width: 24,
             height: 24,
-            integrator,
             budget: Budget::SamplesPerPixel(32),
             threads: 2,
             seed: 3,
             max_depth: 5,
-            ..RenderSettings::default()
         };
         let out = render::render(
             &scene,

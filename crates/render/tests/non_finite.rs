@@ -21,11 +21,11 @@ use std::sync::atomic::AtomicBool;
 use glam::{UVec2, Vec2, Vec3, Vec3A};
 use render::image::Image;
 use render::integrator::pt::sample_pixel;
-use render::integrator::INTEGRATORS;
 use render::light::{EnvironmentLight, PunctualLight};
 use render::sampler::{Sampler, Stream};
 use render::scene::{CameraSpec, Material, Mesh, Scene};
-use render::session::{render, Budget, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, NoProgress, RenderSettings};
+use render::INTEGRATORS;
 
 /// Image side.
 const SIZE: u32 = 32;
@@ -128,18 +128,12 @@ fn no_integrator_drops_a_sample_on_the_small_bright_light_scenes() {
             let settings = RenderSettings {
                 width: SIZE,
                 height: SIZE,
-                integrator: info.kind,
                 // MCMC: mutations per pixel.
                 budget: Budget::SamplesPerPixel(if info.is_mcmc { 256 } else { 512 }),
                 threads: 2,
                 seed: 1,
                 max_depth: 3,
-                mcmc: McmcSettings {
-                    bootstrap_samples: 10_000,
-                    chains: 64,
-                    ..McmcSettings::default()
-                },
-                ..RenderSettings::default()
+                method: info.kind.settings().with_chains(64, 10_000),
             };
             let result = render(&scene, &settings, &NoProgress, &AtomicBool::new(false));
             let lights = scene.lights();

@@ -21,10 +21,12 @@ use pathspace::{
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use render::light::PunctualLight;
+use render::methods::PathMltSettings;
 use render::mlt::pathmlt;
+use render::mlt::pathmlt::PathAdapt;
 use render::pathspace_scene::PathSpaceScene;
 use render::scene::Scene;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, IntegratorKind, NoProgress, RenderSettings};
 use render::RenderError;
 
 /// Relative tolerance of the flow checks on render's f32 scenes.
@@ -282,15 +284,10 @@ fn pathmlt_settings() -> RenderSettings {
     RenderSettings {
         width: 8,
         height: 8,
-        integrator: IntegratorKind::PathMlt,
         budget: Budget::SamplesPerPixel(4),
         threads: 1,
         max_depth: 3,
-        mcmc: McmcSettings {
-            bootstrap_samples: 1000,
-            chains: 4,
-            ..McmcSettings::default()
-        },
+        method: IntegratorKind::PathMlt.settings().with_chains(4, 1000),
         ..RenderSettings::default()
     }
 }
@@ -361,13 +358,12 @@ fn multichain_on_glass_is_bit_identical_across_threads() {
         seed,
         budget: Budget::SamplesPerPixel(8),
         max_depth: 5,
-        mcmc: McmcSettings {
-            perturbation: PerturbationKind::MultiChain,
-            bootstrap_samples: 4000,
+        method: PathMltSettings {
             chains: 16,
-            ..McmcSettings::default()
-        },
-        ..pathmlt_settings()
+            bootstrap_samples: 4000,
+            ..PathMltSettings::otsu2018(PerturbationKind::MultiChain, PathAdapt::Fixed)
+        }
+        .into(),
     };
     let bits = |s: &RenderSettings| -> Vec<[u32; 3]> {
         render(

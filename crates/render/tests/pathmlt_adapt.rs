@@ -17,10 +17,11 @@ use common::stats::{against_reference, assert_finite_non_negative, block_t, roun
 use pathspace::PerturbationKind;
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
+use render::methods::PathMltSettings;
 use render::mlt::pathmlt::{self, PathAdapt};
 use render::mlt::{LargeStepMode, MltBudget, MltSettings};
 use render::scene::Scene;
-use render::session::{render, Budget, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, Budget, NoProgress, RenderSettings};
 
 /// Family-wise false-alarm probability of all the comparisons in this file.
 const ALPHA_FAMILY: f64 = 0.001;
@@ -262,19 +263,16 @@ fn every_adapt_mode_is_bit_identical_across_threads() {
     let with = |kind, adapt, threads, seed| RenderSettings {
         width: 16,
         height: 12,
-        integrator: IntegratorKind::PathMlt,
         threads,
         seed,
         budget: Budget::SamplesPerPixel(64),
         max_depth: 4,
-        mcmc: McmcSettings {
-            perturbation: kind,
-            adapt,
-            bootstrap_samples: 4000,
+        method: PathMltSettings {
             chains: 16,
-            ..McmcSettings::default()
-        },
-        ..RenderSettings::default()
+            bootstrap_samples: 4000,
+            ..PathMltSettings::otsu2018(kind, adapt)
+        }
+        .into(),
     };
     let bits = |s: &RenderSettings| -> Vec<[u32; 3]> {
         render(&scene, s, &NoProgress, &AtomicBool::new(false))

@@ -20,11 +20,12 @@ use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, RasterParams, RasterStep, SmallMutation, SmallStep};
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
+use render::methods::{MethodSettings, MmltSettings, PssmltSettings};
 use render::mlt::{
     render_mlt, LargeStepMode, MltBudget, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS,
 };
 use render::scene::Scene;
-use render::session::{render, IntegratorKind, McmcSettings, NoProgress, RenderSettings};
+use render::session::{render, IntegratorKind, NoProgress, RenderSettings};
 
 /// Family-wise false-alarm probability of the comparisons in this file.
 const ALPHA_FAMILY: f64 = 0.001;
@@ -147,18 +148,22 @@ fn session_settings(integrator: IntegratorKind, threads: usize, raster: f64) -> 
     RenderSettings {
         width: 24,
         height: 16,
-        integrator,
         budget: render::session::Budget::SamplesPerPixel(3),
         threads,
         seed: 17,
         max_depth: 6,
-        mcmc: McmcSettings {
-            bootstrap_samples: 5_000,
-            chains: 16,
-            raster: Some(RasterParams::with_probability(raster)),
-            ..McmcSettings::default()
-        },
-        ..RenderSettings::default()
+        method: match integrator {
+            IntegratorKind::Pssmlt => MethodSettings::from(PssmltSettings {
+                raster: RasterParams::with_probability(raster),
+                ..PssmltSettings::default()
+            }),
+            _ => MmltSettings {
+                raster: RasterParams::with_probability(raster),
+                ..MmltSettings::default()
+            }
+            .into(),
+        }
+        .with_chains(16, 5_000),
     }
 }
 

@@ -22,8 +22,8 @@ use common::scene_file;
 use common::stats::{against_reference, block_t, mean_se, t_critical};
 use render::bdpt::{render_bdpt_sampled, BdptParams};
 use render::budget::Budget;
-use render::error::RenderError;
 use render::image::Image;
+use render::methods::{BdptSettings, MethodSettings, PssmltSettings, PtSettings};
 use render::sampler::SamplerKind;
 use render::scene::Scene;
 use render::session::{render, IntegratorKind, NoProgress, RenderSettings};
@@ -73,13 +73,16 @@ fn pt_sobol(scene: &Scene, spp: u32, max_depth: u32, seed0: u64) -> Vec<Image> {
     (0..R as u64)
         .map(|r| {
             let settings = RenderSettings {
+                method: PtSettings {
+                    sampler: SamplerKind::Sobol,
+                    ..PtSettings::default()
+                }
+                .into(),
                 width: scene.camera().width(),
                 height: scene.camera().height(),
-                integrator: IntegratorKind::Pt,
                 budget: Budget::SamplesPerPixel(spp),
                 seed: seed0 + r,
                 max_depth,
-                sampler: Some(SamplerKind::Sobol),
                 ..RenderSettings::default()
             };
             let out = render(scene, &settings, &NoProgress, &AtomicBool::new(false)).unwrap();
@@ -186,16 +189,27 @@ fn same_seed_one_and_two_threads_are_bit_identical() {
     for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt] {
         let run = |threads, seed| {
             let settings = RenderSettings {
+                method: integrator.settings(),
                 width: 40,
                 height: 24,
-                integrator,
                 budget: Budget::SamplesPerPixel(3),
                 threads,
                 seed,
                 max_depth: 5,
-                sampler: Some(SamplerKind::Sobol),
-                ..RenderSettings::default()
             };
+            assert!(
+                matches!(
+                    settings.method,
+                    MethodSettings::Pt(PtSettings {
+                        sampler: SamplerKind::Sobol,
+                        ..
+                    }) | MethodSettings::Bdpt(BdptSettings {
+                        sampler: SamplerKind::Sobol,
+                        ..
+                    })
+                ),
+                "Sobol is the default"
+            );
             bits(
                 &render(&scene, &settings, &NoProgress, &AtomicBool::new(false))
                     .unwrap()
@@ -209,30 +223,6 @@ fn same_seed_one_and_two_threads_are_bit_identical() {
     }
 }
 
-#[test]
-fn the_sampler_is_an_error_for_integrators_that_own_their_numbers() {
-    let scene = Scene::cornell_box(8, 8);
-    for integrator in [IntegratorKind::Mmlt, IntegratorKind::Qmc] {
-        let settings = RenderSettings {
-            width: 8,
-            height: 8,
-            integrator,
-            sampler: Some(SamplerKind::Sobol),
-            ..RenderSettings::default()
-        };
-        match render(&scene, &settings, &NoProgress, &AtomicBool::new(false)) {
-            Err(
-                e @ RenderError::InvalidSetting {
-                    field: "sampler", ..
-                },
-            ) => {
-                assert!(e.to_string().contains("pt, bdpt or pssmlt"), "{e}");
-            }
-            other => panic!("{integrator:?}: expected a sampler error, got {other:?}"),
-        }
-    }
-}
-
 /// PSSMLT takes the sampler for its direct-lighting pass: the setting reaches the pass (the
 /// two samplers give different images, the default is Sobol's).
 #[test]
@@ -240,13 +230,19 @@ fn pssmlt_draws_its_direct_pass_from_the_sampler() {
     let scene = Scene::cornell_box(8, 8);
     let image = |sampler| {
         let settings = RenderSettings {
+            method: match sampler {
+                Some(sampler) => PssmltSettings {
+                    sampler,
+                    ..PssmltSettings::default()
+                }
+                .into(),
+                None => IntegratorKind::Pssmlt.settings(),
+            },
             width: 8,
             height: 8,
-            integrator: IntegratorKind::Pssmlt,
             budget: Budget::SamplesPerPixel(8),
             threads: 2,
             seed: 5,
-            sampler,
             ..RenderSettings::default()
         };
         render(&scene, &settings, &NoProgress, &AtomicBool::new(false))

@@ -67,9 +67,9 @@ fn pt() -> &'static [Image] {
         (0..R as u64)
             .map(|r| {
                 let settings = RenderSettings {
+                    method: IntegratorKind::Pt.settings(),
                     width: SIZE,
                     height: SIZE,
-                    integrator: IntegratorKind::Pt,
                     budget: Budget::SamplesPerPixel(PT_SPP),
                     seed: 1 + r,
                     max_depth: DEPTH,

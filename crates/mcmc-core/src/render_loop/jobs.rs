@@ -44,6 +44,8 @@ impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
 pub(crate) struct RoundsSummary<Sh> {
     pub(crate) cancelled: bool,
     pub(crate) shared: Sh,
+    /// Wall-clock time of the first round (zero if no round ran).
+    pub(crate) first_round: std::time::Duration,
 }
 
 /// Runs rounds of `round` mutations per chain until every chain's budget is used, the
@@ -64,7 +66,9 @@ where
     Sk: SplatSink,
 {
     let mut pooled = C::Shared::default();
+    let mut first_round = None;
     let stop = || cancel.load(Ordering::Relaxed) || deadline.is_some_and(|t| Instant::now() >= t);
+    let started = Instant::now();
     loop {
         if stop() || !jobs.iter().any(|j| j.chains.iter().any(|c| c.1 > 0)) {
             break;
@@ -111,9 +115,11 @@ where
                 controller.receive(kernel, &pooled);
             }
         }
+        first_round.get_or_insert_with(|| started.elapsed());
     }
     RoundsSummary {
         cancelled: cancel.load(Ordering::Relaxed),
         shared: pooled,
+        first_round: first_round.unwrap_or_default(),
     }
 }

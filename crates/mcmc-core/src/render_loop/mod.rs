@@ -227,6 +227,13 @@ pub struct LoopOutput<K, Sh> {
     pub found_nothing: bool,
     /// Human-readable notes (warnings, early stops, why the image is black).
     pub notes: Vec<String>,
+    /// Wall-clock time of the bootstrap (independent samples, chain starts).
+    pub bootstrap_time: std::time::Duration,
+    /// Wall-clock time of the chains (all rounds).
+    pub chains_time: std::time::Duration,
+    /// Wall-clock time of the first round: with a controller that estimates in its first
+    /// round (automatic large-step control), the estimation phase.
+    pub first_round_time: std::time::Duration,
 }
 
 /// A render loop over a set of targets: what to sample (`targets`, one per chain family), how
@@ -458,6 +465,9 @@ where
             cancelled: boot.cancelled,
             found_nothing: false,
             notes,
+            bootstrap_time: start.elapsed(),
+            chains_time: std::time::Duration::ZERO,
+            first_round_time: std::time::Duration::ZERO,
         };
         out.notes.extend(normalization_note);
         if boot.cancelled {
@@ -554,6 +564,7 @@ where
                 "{skipped} chain starts re-evaluated to zero or non-finite density and were skipped (a target that is not a deterministic function of its state?)"
             ));
         }
+        let chains_start = Instant::now();
         let summary = jobs::run_rounds(
             &mut job_list,
             settings.round_mutations,
@@ -563,6 +574,8 @@ where
         );
         out.cancelled = summary.cancelled;
         out.shared = summary.shared;
+        out.chains_time = chains_start.elapsed();
+        out.first_round_time = summary.first_round;
         for job in &job_list {
             out.sink.merge(&job.sink);
             out.dropped_splats += job.dropped;

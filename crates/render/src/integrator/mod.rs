@@ -1,16 +1,12 @@
 //! Integrators that turn camera rays into radiance estimates, drawing every random number from
-//! a [`crate::sampler::Sampler`]; multiple-importance-sampling weights shared by them; the
-//! table of integrators ([`INTEGRATORS`]).
+//! a [`crate::sampler::Sampler`]; multiple-importance-sampling weights shared by them.
 
 pub mod halton_sampler;
 pub mod lqmc;
 pub mod pt;
 pub mod pt_driver;
 pub mod qmc;
-mod table;
 pub mod vertex_path;
-
-pub use table::{IntegratorInfo, IntegratorKind, INTEGRATORS};
 
 /// Veach's power heuristic with exponent 2 for one sample from each of two strategies:
 /// `f² / (f² + g²)` (Veach 1997, eq. 9.13). Infinite `f` (a delta strategy) gives 1; `f = 0`

@@ -24,7 +24,7 @@ const PASSES: u32 = 16;
 
 /// What [`render_pt`] needs besides the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PtSettings {
+pub struct PtDriverSettings {
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -79,7 +79,7 @@ pub struct PtOutput {
 /// Progress is reported in pixel samples.
 pub fn render_pt(
     scene: &Scene,
-    settings: &PtSettings,
+    settings: &PtDriverSettings,
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> PtOutput {
@@ -110,7 +110,7 @@ pub fn render_pt(
 /// bit-identical for any thread count if `start` is a pure function of its keys.
 pub fn render_pixel_samples<S, N, B>(
     scene: &Scene,
-    settings: &PtSettings,
+    settings: &PtDriverSettings,
     progress: &dyn Progress,
     cancel: &AtomicBool,
     new_sampler: N,
@@ -272,8 +272,8 @@ mod tests {
     use super::*;
     use crate::test_util::CancelAfter;
 
-    fn settings(spp: u32) -> PtSettings {
-        PtSettings {
+    fn settings(spp: u32) -> PtDriverSettings {
+        PtDriverSettings {
             width: 32,
             height: 16,
             max_depth: 3,

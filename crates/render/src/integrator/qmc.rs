@@ -8,7 +8,7 @@ use lqmc::Scrambling;
 use mcmc_core::Progress;
 
 use super::halton_sampler::HaltonSampler;
-use super::pt_driver::{render_pixel_samples, PtOutput, PtSettings};
+use super::pt_driver::{render_pixel_samples, PtDriverSettings, PtOutput};
 use crate::scene::Scene;
 
 /// Renders `scene` with Halton QMC path tracing: the PT driver ([`render_pixel_samples`]:
@@ -17,7 +17,7 @@ use crate::scene::Scene;
 /// the image is bit-identical for any thread count; the rotation keeps it unbiased.
 pub fn render_qmc(
     scene: &Scene,
-    settings: &PtSettings,
+    settings: &PtDriverSettings,
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> PtOutput {
@@ -31,7 +31,7 @@ pub fn render_qmc(
 /// leading digit over the whole interval while keeping every stratification property.
 pub fn render_qmc_with(
     scene: &Scene,
-    settings: &PtSettings,
+    settings: &PtDriverSettings,
     scrambling: Scrambling,
     progress: &dyn Progress,
     cancel: &AtomicBool,

@@ -106,6 +106,13 @@ pub struct MltOutput {
     pub message: Option<String>,
     /// Other notes from the loop (chains capped, bootstrap stopped early by the time budget).
     pub notes: Vec<String>,
+    /// Wall-clock time of the bootstrap.
+    pub bootstrap_time: Duration,
+    /// Wall-clock time of the chains' first round (with automatic large-step control: the
+    /// estimation phase).
+    pub estimation_time: Duration,
+    /// Wall-clock time of all the chains' rounds.
+    pub chains_time: Duration,
 }
 
 /// How [`render_mlt`] makes each chain's kernel: any `Fn(p_large) -> K` (the same kernel for
@@ -145,8 +152,8 @@ pub struct MltEstimator {
     /// over `f/b_d + p` (in the loop's units: times `f / (f + b_d p)`), `b_d` the bootstrap
     /// estimate of the chain's target (MMLT: of its depth), `p` the large-step probability
     /// of that step. Default off here; the session turns it on for PSSMLT
-    /// (`crate::session::large_step_mis_default`; docs/performance.md, "Equal-time
-    /// efficiency (issue 17)", has the measurement). Two-stage (delayed-rejection) kernels
+    /// ([`crate::methods::PssmltSettings`]; docs/methods/large-step-mis.md has the
+    /// measurement). Two-stage (delayed-rejection) kernels
     /// ignore it.
     pub large_step_mis: bool,
     /// How chains are spread over the targets (MMLT: depths): pbrt's joint resampling
@@ -571,6 +578,9 @@ fn finish<Sh>(
                 stage_map: None,
                 message: Some(format!("invalid MCMC settings: {e}")),
                 notes: Vec::new(),
+                bootstrap_time: Duration::ZERO,
+                estimation_time: Duration::ZERO,
+                chains_time: Duration::ZERO,
             }
         }
     };
@@ -607,5 +617,8 @@ fn finish<Sh>(
         stage_map: out.sink.stage_map(),
         message,
         notes,
+        bootstrap_time: out.bootstrap_time,
+        estimation_time: out.first_round_time,
+        chains_time: out.chains_time,
     }
 }

@@ -33,17 +33,15 @@ mod class;
 mod explore;
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
 use glam::{UVec2, Vec2, Vec3};
 use mcmc_core::Progress;
 
 use self::explore::{ExploreStats, Explorer, SplatTarget};
-use super::pt_driver::{render_passes, PtSettings};
+use super::pt_driver::{render_passes, PtDriverSettings};
 use crate::film::PixelRect;
 use crate::image::Image;
 use crate::scene::Scene;
-use crate::session::{RenderOutput, RenderSettings};
 
 pub use self::class::PathClass;
 
@@ -233,7 +231,7 @@ impl SplatTarget for SplatTile {
 /// own buffer, and buffers are merged in tile order.
 pub fn render_lqmc(
     scene: &Scene,
-    settings: &PtSettings,
+    settings: &PtDriverSettings,
     params: &LqmcParams,
     progress: &dyn Progress,
     cancel: &AtomicBool,
@@ -322,42 +320,6 @@ pub fn render_lqmc(
     }
 }
 
-/// `--integrator lqmc` for [`crate::session::render`]: [`render_lqmc`] with the paper's
-/// parameters, its counters as notes.
-pub(crate) fn render_session(
-    scene: &Scene,
-    settings: &RenderSettings,
-    start: Instant,
-    progress: &dyn Progress,
-    cancel: &AtomicBool,
-) -> RenderOutput {
-    let pt = PtSettings {
-        width: settings.width,
-        height: settings.height,
-        max_depth: settings.max_depth,
-        budget: settings.budget,
-        seed: settings.seed,
-        sampler: crate::sampler::SamplerKind::Independent,
-        roulette: Some(crate::integrator::pt::ROULETTE_DEPTH),
-    };
-    let out = render_lqmc(scene, &pt, &LqmcParams::tessari2020(), progress, cancel);
-    let mut notes = scene.notes.clone();
-    notes.push(format!(
-        "lqmc: {} seeds, {} progressions, {} contributions explored ({} members in class, {} rejected), {} splatted directly",
-        out.seeds, out.progressions, out.explored, out.members, out.rejected, out.direct
-    ));
-    RenderOutput {
-        image: out.image,
-        samples: out.seeds,
-        dropped_nonfinite: out.dropped_nonfinite,
-        cancelled: out.cancelled,
-        elapsed: start.elapsed(),
-        notes,
-        strategy_images: Vec::new(),
-        stage_map: None,
-    }
-}
-
 fn add_stats(a: &mut ExploreStats, b: &ExploreStats) {
     a.seeds += b.seeds;
     a.explored += b.explored;
@@ -376,7 +338,7 @@ mod tests {
     #[test]
     fn cornell_renders_finite_and_explores() {
         let scene = Scene::cornell_box(24, 24);
-        let settings = PtSettings {
+        let settings = PtDriverSettings {
             width: 24,
             height: 24,
             max_depth: 3,

@@ -1,5 +1,12 @@
 //! The table of integrators: the one place that names them, from which the CLI's
-//! `--integrator` values and their help, and the tests that run every integrator, are built.
+//! `--integrator` values and their help, the default settings of each, and the tests that run
+//! every integrator, are built.
+
+use super::{
+    BdptSettings, DrmltSettings, LqmcSettings, MalaSettings, MethodSettings, MmltSettings,
+    PathMltSettings, PssmltSettings, PtSettings, QmcSettings,
+};
+use crate::mlt::mala::MalaVariant;
 
 /// Which light-transport algorithm renders the image. Every variant has one row in
 /// [`INTEGRATORS`].
@@ -17,18 +24,18 @@ pub enum IntegratorKind {
     /// chosen per chain.
     Mmlt,
     /// Delayed-rejection MLT (Rioux-Lavoie et al. 2020) over PSSMLT or MMLT
-    /// ([`crate::mlt::dr`]).
+    /// ([`super::drmlt`]).
     Drmlt,
     /// Halton QMC path tracing: the "Halton points" baseline of Tessari et al.
     /// ([`crate::integrator::qmc`]).
     Qmc,
     /// Halton QMC path tracing with Faure's digit permutations under the per-pixel rotation
-    /// ([`crate::integrator::qmc`]; issue 17's stratified sampler for PT).
+    /// ([`crate::integrator::qmc`]).
     QmcFaure,
     /// Local quasi-Monte Carlo exploration of Halton seed paths (Tessari et al.;
-    /// [`crate::integrator::lqmc`]).
+    /// [`super::lqmc`]).
     Lqmc,
-    /// Langevin MLT (Luan et al. 2020) over MMLT, plain MALA ([`crate::mlt::mala`]).
+    /// Langevin MLT (Luan et al. 2020) over MMLT, plain MALA ([`super::mala`]).
     Mala,
     /// Langevin MLT with online adaptation.
     MalaOnline,
@@ -37,12 +44,12 @@ pub enum IntegratorKind {
     /// Langevin MLT with hybrid adaptation.
     MalaHybrid,
     /// Path-space MLT (Veach & Guibas 1997; Otsu et al. 2018, section 8.1) over `pathspace`
-    /// ([`crate::mlt::pathmlt`]).
+    /// ([`super::pathmlt`]).
     PathMlt,
 }
 
 /// One row of the integrator table.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug)]
 pub struct IntegratorInfo {
     /// The name on the command line (`--integrator NAME`).
     pub name: &'static str,
@@ -53,96 +60,121 @@ pub struct IntegratorInfo {
     pub is_mcmc: bool,
     /// What the render session runs.
     pub kind: IntegratorKind,
+    /// The integrator's default settings (the command line's defaults); the session renders
+    /// with [`super::Method::render`] of these settings.
+    pub settings: fn() -> MethodSettings,
 }
 
+impl PartialEq for IntegratorInfo {
+    /// Rows are equal when they run the same integrator (each kind has one row).
+    fn eq(&self, other: &Self) -> bool {
+        self.kind == other.kind
+    }
+}
+
+impl Eq for IntegratorInfo {}
+
 /// Every integrator, in `--help` order; the first is the default. Adding an integrator is one
-/// row here (plus its [`IntegratorKind`] variant and its implementation).
+/// row here, its [`IntegratorKind`] variant and its module under [`crate::methods`] (settings,
+/// presets, render function; docs/architecture.md lists the files).
 pub const INTEGRATORS: &[IntegratorInfo] = &[
     IntegratorInfo {
         name: "pt",
         description: "unidirectional path tracing with next-event estimation and MIS",
         is_mcmc: false,
         kind: IntegratorKind::Pt,
+        settings: || PtSettings::default().into(),
     },
     IntegratorInfo {
         name: "bdpt",
         description: "bidirectional path tracing, all strategies with MIS (the reference)",
         is_mcmc: false,
         kind: IntegratorKind::Bdpt,
+        settings: || BdptSettings::default().into(),
     },
     IntegratorInfo {
         name: "pssmlt",
         description: "primary-sample-space MLT over BDPT (Kelemen et al. 2002)",
         is_mcmc: true,
         kind: IntegratorKind::Pssmlt,
+        settings: || PssmltSettings::default().into(),
     },
     IntegratorInfo {
         name: "mmlt",
         description: "multiplexed MLT: one BDPT strategy per sample (Hachisuka et al. 2014)",
         is_mcmc: true,
         kind: IntegratorKind::Mmlt,
+        settings: || MmltSettings::default().into(),
     },
     IntegratorInfo {
         name: "drmlt",
         description: "delayed-rejection MLT (Rioux-Lavoie et al. 2020): two-stage bold-then-timid kernels (--dr-variant) over PSSMLT or MMLT (--dr-on)",
         is_mcmc: true,
         kind: IntegratorKind::Drmlt,
+        settings: || DrmltSettings::default().into(),
     },
     IntegratorInfo {
         name: "qmc",
         description: "path tracing driven by per-pixel Cranley-Patterson-rotated Halton points (the Halton QMC baseline of Tessari et al.)",
         is_mcmc: false,
         kind: IntegratorKind::Qmc,
+        settings: || QmcSettings::default().into(),
     },
     IntegratorInfo {
         name: "qmc-faure",
         description: "qmc with Faure-permuted Halton digits: no clustering in the large prime bases, lower error per sample than pt",
         is_mcmc: false,
         kind: IntegratorKind::QmcFaure,
+        settings: || QmcSettings::faure().into(),
     },
     IntegratorInfo {
         name: "lqmc",
         description: "local quasi-Monte Carlo (Tessari et al.): Halton seed paths explored by rank-1 lattices, prefixes re-traced and reconnected to the static suffix",
         is_mcmc: false,
         kind: IntegratorKind::Lqmc,
+        settings: || LqmcSettings::default().into(),
     },
     IntegratorInfo {
         name: "mala",
         description: "Langevin MLT (Luan et al. 2020) over MMLT: plain MALA on shallow depths, Kelemen beyond",
         is_mcmc: true,
         kind: IntegratorKind::Mala,
+        settings: || MalaSettings::with_variant(MalaVariant::Plain).into(),
     },
     IntegratorInfo {
         name: "mala-online",
         description: "Langevin MLT: MALA with online (Adam-like, diminishing) adaptation",
         is_mcmc: true,
         kind: IntegratorKind::MalaOnline,
+        settings: || MalaSettings::with_variant(MalaVariant::Online).into(),
     },
     IntegratorInfo {
         name: "mala-cache",
         description: "Langevin MLT: MALA with cache-driven adaptation (gradient cache shared by all chains)",
         is_mcmc: true,
         kind: IntegratorKind::MalaCache,
+        settings: || MalaSettings::with_variant(MalaVariant::Cache).into(),
     },
     IntegratorInfo {
         name: "mala-hybrid",
         description: "Langevin MLT: MALA with hybrid adaptation (online until the cache is full, then cache-driven)",
         is_mcmc: true,
         kind: IntegratorKind::MalaHybrid,
+        settings: || MalaSettings::with_variant(MalaVariant::Hybrid).into(),
     },
     IntegratorInfo {
         name: "pathmlt",
         description: "path-space MLT (Veach & Guibas 1997): a lens or multi-chain perturbation (--perturbation) and the bidirectional mutation, 0.5 each; pinhole camera and area lights only",
         is_mcmc: true,
         kind: IntegratorKind::PathMlt,
+        settings: || PathMltSettings::default().into(),
     },
 ];
 
 impl IntegratorKind {
     /// The Langevin MLT variant of the `mala*` integrators (`None` for the others).
     #[must_use]
-    pub const fn mala_variant(self) -> Option<crate::mlt::mala::MalaVariant> {
-        use crate::mlt::mala::MalaVariant;
+    pub const fn mala_variant(self) -> Option<MalaVariant> {
         match self {
             IntegratorKind::Mala => Some(MalaVariant::Plain),
             IntegratorKind::MalaOnline => Some(MalaVariant::Online),
@@ -180,6 +212,12 @@ impl IntegratorKind {
         self.info().is_mcmc
     }
 
+    /// This integrator's default settings ([`IntegratorInfo::settings`]).
+    #[must_use]
+    pub fn settings(self) -> MethodSettings {
+        (self.info().settings)()
+    }
+
     /// The integrator called `name` on the command line, if any.
     #[must_use]
     pub fn from_name(name: &str) -> Option<Self> {
@@ -206,6 +244,8 @@ mod tests {
             );
             assert_eq!(a.kind.info(), a);
             assert_eq!(IntegratorKind::from_name(a.name), Some(a.kind));
+            // A row's default settings run that row's integrator.
+            assert_eq!(a.kind.settings().kind(), a.kind, "{}", a.name);
         }
         // Every variant has a row; the match has no wildcard arm, so a new variant does not
         // compile here until it is added to `all` (and then needs its row).

@@ -1,0 +1,193 @@
+//! `drmlt`: delayed-rejection MLT (Rioux-Lavoie et al. 2020): a bold first stage and, after
+//! its rejection, a timid second stage under the Tierney-Mira, Green-Mira or pairwise
+//! orbital rule, over PSSMLT or MMLT ([`crate::mlt::dr`]); or cheap-then-expensive (section
+//! 5.2) with MALA as the expensive stage.
+
+use std::sync::atomic::AtomicBool;
+
+use mcmc_core::render_loop::{ChainSlot, SplatPayload};
+use mcmc_core::{Progress, Target};
+
+use super::mala::mala_note;
+use super::{
+    bdpt_params, emitter_notes, mcmc_output, ChainSettings, IntegratorKind, Method, RenderOutput,
+    RenderSettings, Run,
+};
+use crate::bdpt::{BdptParams, Roulette};
+use crate::error::RenderError;
+use crate::mlt::dr::{self, DrBase, DrVariant};
+use crate::mlt::mala::{self, MalaConfig};
+use crate::mlt::{self, MltOutput, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS};
+use crate::scene::Scene;
+
+/// `drmlt`'s settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DrmltSettings {
+    /// Chains, bootstrap, large steps (and the small step of the Kelemen chains of
+    /// cheap-then-expensive beyond MALA's depth).
+    pub chain: ChainSettings,
+    /// The second-stage rule (default the pairwise orbital rule, the paper's recommendation).
+    pub variant: DrVariant,
+    /// The path sampler (default PSSMLT; cheap-then-expensive always runs on MMLT).
+    pub on: DrBase,
+    /// Cheap-then-expensive: the MALA stage's parameters, depth rule and gradient.
+    pub mala: MalaConfig,
+    /// Russian roulette of the BDPT subpaths on PSSMLT (default from 3 bounces on).
+    pub roulette: Roulette,
+}
+
+impl Default for DrmltSettings {
+    fn default() -> Self {
+        Self::rioux_lavoie2020()
+    }
+}
+
+impl DrmltSettings {
+    /// Rioux-Lavoie et al. 2020 as this crate implements it: the pairwise orbital rule
+    /// (section 4.3, eq. 11; the paper's recommendation) on PSSMLT over BDPT (section 5.1.1),
+    /// large steps with probability 0.3 and 100 000 bootstrap samples (the authors' pLarge
+    /// and luminanceSamples), pairwise Kelemen first stage (docs/methods/drmlt.md lists where
+    /// the authors' kernels differ).
+    #[must_use]
+    pub fn rioux_lavoie2020() -> Self {
+        Self::rioux_lavoie2020_with(DrVariant::Orbital, DrBase::Pssmlt)
+    }
+
+    /// [`DrmltSettings::rioux_lavoie2020`] with another rule and path sampler (the paper's
+    /// Fig. 7 compares the rules on both samplers).
+    #[must_use]
+    pub fn rioux_lavoie2020_with(variant: DrVariant, on: DrBase) -> Self {
+        Self {
+            chain: ChainSettings::kelemen2002(),
+            variant,
+            on,
+            mala: MalaConfig::default(),
+            roulette: BdptParams::default().roulette,
+        }
+    }
+}
+
+impl Method for DrmltSettings {
+    fn kind(&self) -> IntegratorKind {
+        IntegratorKind::Drmlt
+    }
+
+    fn validate(&self, _common: &RenderSettings) -> Result<(), RenderError> {
+        self.chain.validate()
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        common: &RenderSettings,
+        run: &Run<'_>,
+    ) -> Result<RenderOutput, RenderError> {
+        let params = bdpt_params(common, self.roulette);
+        let (w, h) = (common.width, common.height);
+        let mut notes = emitter_notes(scene);
+        let mlt_settings = self.chain.mlt_settings(common, PATH_STREAMS, true);
+        let out = if self.variant == DrVariant::CheapThenExpensive {
+            notes.push(format!(
+                "delayed rejection: cheap-then-expensive (Gaussian sigma {} then MALA, Green-Mira) on MMLT{}; {}",
+                self.mala.cheap_sigma,
+                if self.on == DrBase::Pssmlt { " (it needs one strategy per sample: --dr-on pssmlt is ignored)" } else { "" },
+                mala_note(&self.mala)
+            ));
+            mala::render(
+                scene,
+                params,
+                &self.mala,
+                true,
+                &mlt_settings,
+                self.chain.small_step,
+                run.progress,
+                run.cancel,
+            )
+        } else {
+            let layout = dr::dr_layout(common.max_depth);
+            notes.push(format!(
+                "delayed rejection: {} second stage on {}",
+                self.variant.name(),
+                match self.on {
+                    DrBase::Pssmlt => "PSSMLT",
+                    DrBase::Mmlt => "MMLT (camera subpath only)",
+                }
+            ));
+            match self.on {
+                DrBase::Mmlt => {
+                    let targets = MmltTarget::all_depths(scene, params, w, h);
+                    render_dr(
+                        &targets,
+                        self.variant,
+                        layout,
+                        self.on,
+                        &mlt_settings,
+                        run.progress,
+                        run.cancel,
+                    )
+                }
+                DrBase::Pssmlt => {
+                    let targets = [PssmltTarget::new(scene, params, w, h)];
+                    render_dr(
+                        &targets,
+                        self.variant,
+                        layout,
+                        self.on,
+                        &mlt_settings,
+                        run.progress,
+                        run.cancel,
+                    )
+                }
+            }
+        };
+        Ok(mcmc_output(out, notes, run.start.elapsed()))
+    }
+}
+
+/// Delayed-rejection MLT over `targets` with the kernel of `variant` ([`crate::mlt::dr`]).
+fn render_dr<T>(
+    targets: &[T],
+    variant: DrVariant,
+    layout: pss::PairLayout,
+    base: DrBase,
+    mlt_settings: &MltSettings,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> MltOutput
+where
+    T: Target<State = pss::PssState>,
+    T::Payload: SplatPayload,
+{
+    match variant {
+        DrVariant::Orbital => mlt::render_mlt(
+            targets,
+            mlt::PerChain(|slot: ChainSlot, p| {
+                dr::orbital_kernel(layout, base, p, slot.target as u32)
+            }),
+            mlt_settings,
+            progress,
+            cancel,
+        ),
+        DrVariant::TierneyMira => mlt::render_mlt(
+            targets,
+            mlt::PerChain(|slot: ChainSlot, p| {
+                dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
+            }),
+            mlt_settings,
+            progress,
+            cancel,
+        ),
+        DrVariant::GreenMira => mlt::render_mlt(
+            targets,
+            mlt::PerChain(|slot: ChainSlot, p| {
+                dr::green_mira_kernel(layout, base, p, slot.target as u32)
+            }),
+            mlt_settings,
+            progress,
+            cancel,
+        ),
+        DrVariant::CheapThenExpensive => {
+            unreachable!("cheap-then-expensive runs through the Langevin driver")
+        }
+    }
+}

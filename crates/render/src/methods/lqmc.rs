@@ -1,0 +1,76 @@
+//! `lqmc`: local quasi-Monte Carlo exploration (Tessari et al. 2020): Halton seed paths
+//! explored by rank-1 lattices, prefixes re-traced and reconnected to the static suffix
+//! ([`crate::integrator::lqmc`]).
+
+use super::{IntegratorKind, Method, RenderOutput, RenderSettings, Run};
+use crate::error::RenderError;
+use crate::integrator::lqmc::{render_lqmc, LqmcParams};
+use crate::integrator::pt::ROULETTE_DEPTH;
+use crate::integrator::pt_driver::PtDriverSettings;
+use crate::sampler::SamplerKind;
+use crate::scene::Scene;
+
+/// `lqmc`'s settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LqmcSettings {
+    /// Lattice sizes, tiles, classes ([`LqmcParams`]).
+    pub params: LqmcParams,
+}
+
+impl Default for LqmcSettings {
+    fn default() -> Self {
+        Self::tessari2020()
+    }
+}
+
+impl LqmcSettings {
+    /// Tessari et al. 2020, section 4 "Parameters" ([`LqmcParams::tessari2020`]: lattices of
+    /// 23 points for normal and depth-of-field paths and 97 for caustics, 24 image tiles
+    /// across, 48 for caustics, 2 x 2 aperture tiles).
+    #[must_use]
+    pub fn tessari2020() -> Self {
+        Self {
+            params: LqmcParams::tessari2020(),
+        }
+    }
+}
+
+impl Method for LqmcSettings {
+    fn kind(&self) -> IntegratorKind {
+        IntegratorKind::Lqmc
+    }
+
+    fn sized_camera(&self) -> bool {
+        false
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        common: &RenderSettings,
+        run: &Run<'_>,
+    ) -> Result<RenderOutput, RenderError> {
+        let pt = PtDriverSettings {
+            width: common.width,
+            height: common.height,
+            max_depth: common.max_depth,
+            budget: common.budget,
+            seed: common.seed,
+            sampler: SamplerKind::Independent,
+            roulette: Some(ROULETTE_DEPTH),
+        };
+        let out = render_lqmc(scene, &pt, &self.params, run.progress, run.cancel);
+        let mut notes = scene.notes.clone();
+        notes.push(format!(
+            "lqmc: {} seeds, {} progressions, {} contributions explored ({} members in class, {} rejected), {} splatted directly",
+            out.seeds, out.progressions, out.explored, out.members, out.rejected, out.direct
+        ));
+        Ok(RenderOutput {
+            samples: out.seeds,
+            dropped_nonfinite: out.dropped_nonfinite,
+            cancelled: out.cancelled,
+            notes,
+            ..RenderOutput::new(out.image, run.start.elapsed())
+        })
+    }
+}

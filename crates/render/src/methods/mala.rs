@@ -1,0 +1,126 @@
+//! `mala`, `mala-online`, `mala-cache`, `mala-hybrid`: Langevin MLT (Luan et al. 2020) over
+//! MMLT: MALA small steps on shallow depths with plain, online, cache-driven or hybrid
+//! adaptation of the preconditioner, Kelemen steps beyond ([`crate::mlt::mala`]).
+
+use mcmc_core::langevin::LangevinParams;
+
+use super::{
+    bdpt_params, emitter_notes, mcmc_output, ChainSettings, IntegratorKind, Method, RenderOutput,
+    RenderSettings, Run,
+};
+use crate::bdpt::BdptParams;
+use crate::error::RenderError;
+use crate::mlt::mala::{self, GradientMethod, MalaConfig, MalaVariant};
+use crate::mlt::PATH_STREAMS;
+use crate::scene::Scene;
+
+/// Langevin MLT's settings; the variant ([`MalaConfig::variant`]) picks the row.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MalaSettings {
+    /// Chains, bootstrap, large steps, and the Kelemen small step of chains deeper than
+    /// [`MalaConfig::max_depth`].
+    pub chain: ChainSettings,
+    /// The variant, MALA's parameters, the depth rule and the gradient.
+    pub config: MalaConfig,
+}
+
+impl Default for MalaSettings {
+    /// [`MalaSettings::luan2020`] (hybrid adaptation).
+    fn default() -> Self {
+        Self::luan2020()
+    }
+}
+
+impl MalaSettings {
+    /// The paper's method (Luan et al. 2020): hybrid adaptation (Alg. 4, the paper's main
+    /// algorithm) with section 7's parameters, epsilon 0.01, K = 30 neighbours, cache size
+    /// H = 10 000 ([`LangevinParams::luan2020`]); MALA on MMLT depths up to 3, Kelemen steps
+    /// beyond; gradients by forward-mode dual numbers.
+    #[must_use]
+    pub const fn luan2020() -> Self {
+        Self::luan2020_variant(MalaVariant::Hybrid)
+    }
+
+    /// [`MalaSettings::luan2020`] with the authors' code's constants
+    /// ([`LangevinParams::luan2020_code`]: step 0.005, K = 5, H = 3000, preconditioner
+    /// clamped to [0.01, 100], shrink prior 0.005) where they differ from the text.
+    #[must_use]
+    pub const fn luan2020_code() -> Self {
+        let mut s = Self::luan2020();
+        s.config.params = LangevinParams::luan2020_code();
+        s
+    }
+
+    /// [`MalaSettings::luan2020`] with another adaptation variant (the paper's Fig. 7-9
+    /// compare plain, online, cache-driven and hybrid adaptation).
+    #[must_use]
+    pub const fn luan2020_variant(variant: MalaVariant) -> Self {
+        Self {
+            chain: ChainSettings::kelemen2002(),
+            config: MalaConfig {
+                variant,
+                params: LangevinParams::luan2020(),
+                max_depth: 3,
+                gradient: GradientMethod::Dual,
+                fd_step: 1e-4,
+                cheap_sigma: 1.0 / 64.0,
+            },
+        }
+    }
+
+    /// The command line's defaults for `variant` (the `mala*` rows).
+    #[must_use]
+    pub fn with_variant(variant: MalaVariant) -> Self {
+        Self::luan2020_variant(variant)
+    }
+}
+
+/// One line on the Langevin settings for the render notes.
+pub(super) fn mala_note(config: &MalaConfig) -> String {
+    format!(
+        "Langevin MLT: {} (epsilon {}, truncation {}), MALA on MMLT depths <= {} and Kelemen beyond; gradients by central finite differences (h = {:e})",
+        config.variant.name(),
+        config.params.epsilon,
+        config.params.max_gradient,
+        config.max_depth,
+        config.fd_step
+    )
+}
+
+impl Method for MalaSettings {
+    fn kind(&self) -> IntegratorKind {
+        match self.config.variant {
+            MalaVariant::Plain => IntegratorKind::Mala,
+            MalaVariant::Online => IntegratorKind::MalaOnline,
+            MalaVariant::Cache => IntegratorKind::MalaCache,
+            MalaVariant::Hybrid => IntegratorKind::MalaHybrid,
+        }
+    }
+
+    fn validate(&self, _common: &RenderSettings) -> Result<(), RenderError> {
+        self.chain.validate()
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        common: &RenderSettings,
+        run: &Run<'_>,
+    ) -> Result<RenderOutput, RenderError> {
+        let params = bdpt_params(common, BdptParams::default().roulette);
+        let mut notes = emitter_notes(scene);
+        let mlt_settings = self.chain.mlt_settings(common, PATH_STREAMS, false);
+        notes.push(mala_note(&self.config));
+        let out = mala::render(
+            scene,
+            params,
+            &self.config,
+            false,
+            &mlt_settings,
+            self.chain.small_step,
+            run.progress,
+            run.cancel,
+        );
+        Ok(mcmc_output(out, notes, run.start.elapsed()))
+    }
+}

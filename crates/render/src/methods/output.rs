@@ -1,0 +1,193 @@
+//! What a render returns: the image, counters, human-readable notes and, for the Markov chain
+//! methods, typed run statistics ([`McmcStats`]).
+
+use std::time::Duration;
+
+use mcmc_core::controller::LargeStepEstimate;
+use mcmc_core::stats::AcceptanceStats;
+
+use crate::image::Image;
+use crate::mlt::MltOutput;
+
+/// The result of a render.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// The rendered (possibly partial, if cancelled) image.
+    pub image: Image,
+    /// Number of samples (or mutations) evaluated.
+    pub samples: u64,
+    /// Samples whose radiance was NaN or infinite; they were dropped, not splatted.
+    pub dropped_nonfinite: u64,
+    /// True if the render stopped early because `cancel` was set.
+    pub cancelled: bool,
+    /// Wall-clock time spent.
+    pub elapsed: Duration,
+    /// Notes for people (e.g. why an image is black). Programs read [`RenderOutput::mcmc`]
+    /// instead: the notes' wording may change.
+    pub notes: Vec<String>,
+    /// BDPT with `strategy_images`: the MIS-weighted image of each strategy `(s, t)`.
+    pub strategy_images: Vec<((u8, u8), Image)>,
+    /// Delayed-rejection MLT: the stage map, per pixel the share of the estimate contributed
+    /// by second-stage candidates (`render::mlt::StagedSplats`; paper Fig. 1 and 9).
+    pub stage_map: Option<Image>,
+    /// The Markov chain methods' run statistics (`None` for PT, QMC, BDPT and LQMC).
+    pub mcmc: Option<McmcStats>,
+}
+
+impl RenderOutput {
+    /// An output with `image` and no counters, notes or statistics (the methods fill in the
+    /// rest).
+    #[must_use]
+    pub fn new(image: Image, elapsed: Duration) -> Self {
+        Self {
+            image,
+            samples: 0,
+            dropped_nonfinite: 0,
+            cancelled: false,
+            elapsed,
+            notes: Vec::new(),
+            strategy_images: Vec::new(),
+            stage_map: None,
+            mcmc: None,
+        }
+    }
+}
+
+/// Wall-clock time of each phase of a Markov chain render.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// A separate direct-lighting pass, its pilot included (PSSMLT).
+    pub direct_pass: Duration,
+    /// A separate estimate of the normalisation (MMLT's `--bdpt-normalization`).
+    pub normalization: Duration,
+    /// The bootstrap: independent samples for `b` and the chain starts.
+    pub bootstrap: Duration,
+    /// The first round of the chains; with automatic large-step control, its estimation
+    /// phase (the rest of the chains' time is [`PhaseTimes::chains`] minus this).
+    pub estimation: Duration,
+    /// All rounds of the chains, the estimation phase included.
+    pub chains: Duration,
+}
+
+/// A separate direct-lighting pass's run (PSSMLT: `render::mlt::direct`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectPassStats {
+    /// The pass rendered path depths `0..=depth`; the chains the deeper ones.
+    pub depth: u32,
+    /// BDPT samples per pixel the pass took.
+    pub spp: u32,
+    /// With a balanced pass: the pilot's estimate of the pass depths' share of the light.
+    pub light_share: Option<f64>,
+    /// With a balanced or proportional pass: the share of a time budget it was given.
+    pub time_share: Option<f64>,
+}
+
+/// Typed statistics of a Markov chain render: the normalisation, acceptance per mixture
+/// component and per delayed-rejection stage, the automatic large-step estimate and the time
+/// of each phase.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct McmcStats {
+    /// The normalisation `b` (bootstrap estimate, or the one given).
+    pub b: f64,
+    /// Standard error of the bootstrap's `b`.
+    pub b_standard_error: f64,
+    /// Bootstrap samples evaluated.
+    pub bootstrap_samples: u64,
+    /// The estimate `b_d` of each target (MMLT: path depth); they sum to `b`.
+    pub target_b: Vec<f64>,
+    /// Chains started per target.
+    pub target_chains: Vec<usize>,
+    /// Mutations performed (all chains).
+    pub mutations: u64,
+    /// Acceptance pooled over chains: per mixture component
+    /// ([`AcceptanceStats::component_acceptance_rate`]) and per delayed-rejection stage
+    /// ([`AcceptanceStats::stage_acceptance_rate`]).
+    pub acceptance: AcceptanceStats,
+    /// The automatic large-step estimate (`eta_s`, `eta_l`, `eta_0`, `p_l`; Zsolnai &
+    /// Szirmay-Kalos 2013, section 3), if automatic control ran to the end of its phase.
+    pub large_step: Option<LargeStepEstimate>,
+    /// The large-step probability after any estimation phase.
+    pub large_step_probability: f64,
+    /// A separate direct-lighting pass, if one ran.
+    pub direct_pass: Option<DirectPassStats>,
+    /// True if the bootstrap found no light-carrying path (the image is black).
+    pub found_nothing: bool,
+    /// Wall-clock time per phase.
+    pub times: PhaseTimes,
+}
+
+impl McmcStats {
+    /// The acceptance rate over all steps.
+    #[must_use]
+    pub fn acceptance_rate(&self) -> f64 {
+        self.acceptance.acceptance_rate()
+    }
+
+    /// The statistics of an MCMC driver run.
+    #[must_use]
+    pub fn from_mlt(out: &MltOutput) -> Self {
+        Self {
+            b: out.b,
+            b_standard_error: out.b_standard_error,
+            bootstrap_samples: out.bootstrap_samples,
+            target_b: out.target_b.clone(),
+            target_chains: out.target_chains.clone(),
+            mutations: out.mutations,
+            acceptance: out.stats,
+            large_step: out.large_step,
+            large_step_probability: out.final_large_step_probability,
+            direct_pass: None,
+            found_nothing: out.message.is_some(),
+            times: PhaseTimes {
+                bootstrap: out.bootstrap_time,
+                estimation: out.estimation_time,
+                chains: out.chains_time,
+                ..PhaseTimes::default()
+            },
+        }
+    }
+}
+
+/// The notes every Markov chain render reports: the driver's own, then why the image is black
+/// or the bootstrap's `b` and the acceptance rate, then the automatic large-step estimate.
+#[must_use]
+pub fn mcmc_notes(out: &MltOutput) -> Vec<String> {
+    let mut notes = out.notes.clone();
+    if let Some(msg) = &out.message {
+        notes.push(msg.clone());
+    } else {
+        notes.push(format!(
+            "bootstrap: b = {:.6} (standard error {:.2e}) from {} samples",
+            out.b, out.b_standard_error, out.bootstrap_samples
+        ));
+        notes.push(format!(
+            "acceptance rate {:.3} over {} mutations",
+            out.stats.acceptance_rate(),
+            out.mutations
+        ));
+    }
+    if let Some(e) = out.large_step {
+        notes.push(format!(
+            "automatic large-step control: eta_s = {:.4}, eta_l = {:.4}, eta_0 = {:.4} ({} small, {} large steps) -> p_large = {:.4}",
+            e.eta_s, e.eta_l, e.eta_0, e.small_steps, e.large_steps, e.large_step_probability
+        ));
+    }
+    notes
+}
+
+/// A render output from an MCMC driver run: image, counters, `notes` then the run's own
+/// ([`mcmc_notes`]), statistics.
+#[must_use]
+pub fn mcmc_output(out: MltOutput, mut notes: Vec<String>, elapsed: Duration) -> RenderOutput {
+    notes.extend(mcmc_notes(&out));
+    let mcmc = McmcStats::from_mlt(&out);
+    RenderOutput {
+        samples: out.mutations,
+        dropped_nonfinite: out.dropped + out.non_finite,
+        cancelled: out.cancelled,
+        notes,
+        stage_map: out.stage_map,
+        mcmc: Some(mcmc),
+        ..RenderOutput::new(out.image, elapsed)
+    }
+}

@@ -1,0 +1,150 @@
+//! `pt`, `qmc` and `qmc-faure`: unidirectional path tracing with next-event estimation and
+//! MIS, over a per-pixel sampler or Cranley-Patterson-rotated Halton points.
+
+use lqmc::Scrambling;
+
+use super::{emitter_notes, IntegratorKind, Method, RenderOutput, RenderSettings, Run};
+use crate::error::RenderError;
+use crate::integrator::pt::ROULETTE_DEPTH;
+use crate::integrator::pt_driver::{self, PtDriverSettings, PtOutput};
+use crate::integrator::qmc;
+use crate::sampler::SamplerKind;
+use crate::scene::Scene;
+
+/// `pt`: path tracing over a per-pixel sampler.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PtSettings {
+    /// The per-pixel sampler (default Owen-scrambled Sobol points; docs/performance.md has
+    /// the measurement behind the default).
+    pub sampler: SamplerKind,
+    /// Russian roulette from this bounce on (pbrt-v4's rule, [`crate::integrator::pt::li_with`];
+    /// `None`: off). Default 5 (Mitsuba 3's `rr_depth`).
+    pub roulette: Option<u32>,
+}
+
+impl Default for PtSettings {
+    fn default() -> Self {
+        Self {
+            sampler: SamplerKind::Sobol,
+            roulette: Some(5),
+        }
+    }
+}
+
+impl PtSettings {
+    /// pbrt-v4's path tracer: independent samples, roulette from bounce
+    /// [`ROULETTE_DEPTH`] (pbrt-v4 `PathIntegrator`).
+    #[must_use]
+    pub const fn pbrt_v4() -> Self {
+        Self {
+            sampler: SamplerKind::Independent,
+            roulette: Some(ROULETTE_DEPTH),
+        }
+    }
+}
+
+/// `qmc` and `qmc-faure`: path tracing driven by per-pixel rotated Halton points (the "Halton
+/// points" baseline of Tessari et al. 2020, section 6).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct QmcSettings {
+    /// Digit scrambling of the Halton points (`qmc`: none; `qmc-faure`: Faure's
+    /// permutations).
+    pub scrambling: Scrambling,
+    /// Russian roulette from this bounce on (`None`: off). Default pbrt-v4's
+    /// [`ROULETTE_DEPTH`].
+    pub roulette: Option<u32>,
+}
+
+impl Default for QmcSettings {
+    fn default() -> Self {
+        Self {
+            scrambling: Scrambling::None,
+            roulette: Some(ROULETTE_DEPTH),
+        }
+    }
+}
+
+impl QmcSettings {
+    /// `qmc-faure`: Faure's digit permutations under the per-pixel rotation.
+    #[must_use]
+    pub fn faure() -> Self {
+        Self {
+            scrambling: Scrambling::Faure,
+            ..Self::default()
+        }
+    }
+}
+
+/// The PT driver's settings for `common` with `sampler` and `roulette`.
+fn driver_settings(
+    common: &RenderSettings,
+    sampler: SamplerKind,
+    roulette: Option<u32>,
+) -> PtDriverSettings {
+    PtDriverSettings {
+        width: common.width,
+        height: common.height,
+        max_depth: common.max_depth,
+        budget: common.budget,
+        seed: common.seed,
+        sampler,
+        roulette,
+    }
+}
+
+/// A render output from the PT driver's.
+fn output(scene: &Scene, out: PtOutput, run: &Run<'_>) -> RenderOutput {
+    RenderOutput {
+        samples: out.samples,
+        dropped_nonfinite: out.dropped_nonfinite,
+        cancelled: out.cancelled,
+        notes: emitter_notes(scene),
+        ..RenderOutput::new(out.image, run.start.elapsed())
+    }
+}
+
+impl Method for PtSettings {
+    fn kind(&self) -> IntegratorKind {
+        IntegratorKind::Pt
+    }
+
+    fn sized_camera(&self) -> bool {
+        false
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        common: &RenderSettings,
+        run: &Run<'_>,
+    ) -> Result<RenderOutput, RenderError> {
+        let settings = driver_settings(common, self.sampler, self.roulette);
+        let out = pt_driver::render_pt(scene, &settings, run.progress, run.cancel);
+        Ok(output(scene, out, run))
+    }
+}
+
+impl Method for QmcSettings {
+    fn kind(&self) -> IntegratorKind {
+        if self.scrambling == Scrambling::Faure {
+            IntegratorKind::QmcFaure
+        } else {
+            IntegratorKind::Qmc
+        }
+    }
+
+    fn sized_camera(&self) -> bool {
+        false
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        common: &RenderSettings,
+        run: &Run<'_>,
+    ) -> Result<RenderOutput, RenderError> {
+        let settings = driver_settings(common, SamplerKind::Independent, self.roulette);
+        let out = qmc::render_qmc_with(scene, &settings, self.scrambling, run.progress, run.cancel);
+        Ok(output(scene, out, run))
+    }
+}
