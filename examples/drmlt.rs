@@ -54,7 +54,7 @@ use render::image::Image;
 use render::methods::{DrmltSettings, MethodSettings, MmltSettings, PssmltSettings};
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::{
-    render_mlt, LargeStepMode, MltBudget, MltSettings, MmltTarget, PerChain, PssmltTarget,
+    LargeStepMode, MltBudget, MltDriver, MltSettings, MmltTarget, PerChain, PssmltTarget,
     PATH_STREAMS,
 };
 use render::scene::Scene;
@@ -331,40 +331,37 @@ where
     let no = AtomicBool::new(false);
     match variant {
         DrVariant::Orbital => {
-            render_mlt(
-                targets,
-                PerChain(|slot: ChainSlot, p| {
-                    dr::orbital_kernel(layout, base, p, slot.target as u32)
-                }),
-                settings,
-                &NoProgress,
-                &no,
-            )
-            .stats
+            MltDriver::new(targets, settings)
+                .run(
+                    PerChain(|slot: ChainSlot, p| {
+                        dr::orbital_kernel(layout, base, p, slot.target as u32)
+                    }),
+                    &NoProgress,
+                    &no,
+                )
+                .stats
         }
         DrVariant::TierneyMira => {
-            render_mlt(
-                targets,
-                PerChain(|slot: ChainSlot, p| {
-                    dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
-                }),
-                settings,
-                &NoProgress,
-                &no,
-            )
-            .stats
+            MltDriver::new(targets, settings)
+                .run(
+                    PerChain(|slot: ChainSlot, p| {
+                        dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
+                    }),
+                    &NoProgress,
+                    &no,
+                )
+                .stats
         }
         DrVariant::GreenMira => {
-            render_mlt(
-                targets,
-                PerChain(|slot: ChainSlot, p| {
-                    dr::green_mira_kernel(layout, base, p, slot.target as u32)
-                }),
-                settings,
-                &NoProgress,
-                &no,
-            )
-            .stats
+            MltDriver::new(targets, settings)
+                .run(
+                    PerChain(|slot: ChainSlot, p| {
+                        dr::green_mira_kernel(layout, base, p, slot.target as u32)
+                    }),
+                    &NoProgress,
+                    &no,
+                )
+                .stats
         }
         // Not among this example's configurations (it needs differentiable MMLT targets:
         // examples/langevin.rs measures it).

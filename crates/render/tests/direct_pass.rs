@@ -26,8 +26,7 @@ use render::bdpt::BdptParams;
 use render::image::Image;
 use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_DEPTH_DEFAULT};
 use render::mlt::{
-    render_mlt_with_estimator, LargeStepMode, MltBudget, MltEstimator, MltSettings, PssmltTarget,
-    PATH_STREAMS,
+    LargeStepMode, MltBudget, MltDriver, MltEstimator, MltSettings, PssmltTarget, PATH_STREAMS,
 };
 use render::sampler::SamplerKind;
 use render::scene::Scene;
@@ -91,14 +90,9 @@ fn replicate(seed: u64, chain_min_depth: u32, pass: Option<(SamplerKind, u32)>) 
         large_step_mis: true,
         ..MltEstimator::plain()
     };
-    let out = render_mlt_with_estimator(
-        &[target],
-        kernel,
-        &settings,
-        estimator,
-        &NoProgress,
-        &cancel,
-    );
+    let out = MltDriver::new(&[target], &settings)
+        .estimator(estimator)
+        .run(kernel, &NoProgress, &cancel);
     assert!(out.message.is_none(), "{:?}", out.message);
     let mut image = out.image;
     if let Some((sampler, depth)) = pass {

@@ -28,8 +28,8 @@ use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::BdptParams;
 use render::image::Image;
 use render::mlt::{
-    render_mlt_with_estimator, LargeStepMode, MltBudget, MltEstimator, MltOutput, MltSettings,
-    MmltTarget, PssmltTarget, PATH_STREAMS,
+    LargeStepMode, MltBudget, MltDriver, MltEstimator, MltOutput, MltSettings, MmltTarget,
+    PssmltTarget, PATH_STREAMS,
 };
 use render::scene::Scene;
 use render::session::NoProgress;
@@ -84,22 +84,12 @@ fn render(method: Method, scene: &Scene, params: BdptParams, s: &MltSettings) ->
     let (w, h) = (s.width as u32, s.height as u32);
     let cancel = AtomicBool::new(false);
     match method {
-        Method::Pssmlt => render_mlt_with_estimator(
-            &[PssmltTarget::new(scene, params, w, h)],
-            kernel,
-            s,
-            MIS,
-            &NoProgress,
-            &cancel,
-        ),
-        Method::Mmlt => render_mlt_with_estimator(
-            &MmltTarget::all_depths(scene, params, w, h),
-            kernel,
-            s,
-            MIS,
-            &NoProgress,
-            &cancel,
-        ),
+        Method::Pssmlt => MltDriver::new(&[PssmltTarget::new(scene, params, w, h)], s)
+            .estimator(MIS)
+            .run(kernel, &NoProgress, &cancel),
+        Method::Mmlt => MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), s)
+            .estimator(MIS)
+            .run(kernel, &NoProgress, &cancel),
     }
 }
 
@@ -254,22 +244,16 @@ fn with_mis_one_and_two_threads_are_bit_identical() {
                     let none = MltEstimator::default();
                     let cancel = AtomicBool::new(false);
                     match method {
-                        Method::Pssmlt => render_mlt_with_estimator(
-                            &[PssmltTarget::new(&scene, params(), w, h)],
-                            kernel,
-                            &s,
-                            none,
-                            &NoProgress,
-                            &cancel,
-                        ),
-                        Method::Mmlt => render_mlt_with_estimator(
-                            &MmltTarget::all_depths(&scene, params(), w, h),
-                            kernel,
-                            &s,
-                            none,
-                            &NoProgress,
-                            &cancel,
-                        ),
+                        Method::Pssmlt => {
+                            MltDriver::new(&[PssmltTarget::new(&scene, params(), w, h)], &s)
+                                .estimator(none)
+                                .run(kernel, &NoProgress, &cancel)
+                        }
+                        Method::Mmlt => {
+                            MltDriver::new(&MmltTarget::all_depths(&scene, params(), w, h), &s)
+                                .estimator(none)
+                                .run(kernel, &NoProgress, &cancel)
+                        }
                     }
                 });
             assert!(bits(&a.image) != bits(&plain.image));

@@ -53,7 +53,7 @@ use render::image::Image;
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::mala::{self, MalaConfig, MalaVariant};
 use render::mlt::{
-    render_mlt, LargeStepMode, MltBudget, MltOutput, MltSettings, MmltTarget, PerChain,
+    LargeStepMode, MltBudget, MltDriver, MltOutput, MltSettings, MmltTarget, PerChain,
     PssmltTarget, PATH_STREAMS,
 };
 use render::scene::{CameraSpec, Material, Mesh, Scene};
@@ -145,17 +145,13 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
     let (w, h) = (settings.width as u32, settings.height as u32);
     let cancel = AtomicBool::new(false);
     match method {
-        Method::Pssmlt => render_mlt(
-            &[PssmltTarget::new(scene, params, w, h)],
+        Method::Pssmlt => MltDriver::new(&[PssmltTarget::new(scene, params, w, h)], settings).run(
             kernel,
-            settings,
             &NoProgress,
             &cancel,
         ),
-        Method::Mmlt => render_mlt(
-            &MmltTarget::all_depths(scene, params, w, h),
+        Method::Mmlt => MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings).run(
             kernel,
-            settings,
             &NoProgress,
             &cancel,
         ),
@@ -164,24 +160,18 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             let layout = dr::dr_layout(params.max_depth);
             let base = DrBase::Pssmlt;
             match variant {
-                DrVariant::Orbital => render_mlt(
-                    &targets,
+                DrVariant::Orbital => MltDriver::new(&targets, settings).run(
                     |p| dr::orbital_kernel(layout, base, p, 0),
-                    settings,
                     &NoProgress,
                     &cancel,
                 ),
-                DrVariant::TierneyMira => render_mlt(
-                    &targets,
+                DrVariant::TierneyMira => MltDriver::new(&targets, settings).run(
                     |p| dr::tierney_mira_kernel(layout, base, p, 0),
-                    settings,
                     &NoProgress,
                     &cancel,
                 ),
-                DrVariant::GreenMira => render_mlt(
-                    &targets,
+                DrVariant::GreenMira => MltDriver::new(&targets, settings).run(
                     |p| dr::green_mira_kernel(layout, base, p, 0),
-                    settings,
                     &NoProgress,
                     &cancel,
                 ),
@@ -213,12 +203,10 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
         ),
         Method::DrMmlt => {
             let layout = dr::dr_layout(params.max_depth);
-            render_mlt(
-                &MmltTarget::all_depths(scene, params, w, h),
+            MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings).run(
                 PerChain(|slot: ChainSlot, p| {
                     dr::orbital_kernel(layout, DrBase::Mmlt, p, slot.target as u32)
                 }),
-                settings,
                 &NoProgress,
                 &cancel,
             )

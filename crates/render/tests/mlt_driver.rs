@@ -6,7 +6,7 @@ use std::sync::atomic::AtomicBool;
 use mcmc_core::render_loop::{Splat, SplatPayload};
 use mcmc_core::Mh;
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
-use render::mlt::{render_mlt, LargeStepMode, MltBudget, MltSettings};
+use render::mlt::{LargeStepMode, MltBudget, MltDriver, MltSettings};
 use render::session::NoProgress;
 
 const W: usize = 8;
@@ -87,10 +87,8 @@ fn kernel(p: f64) -> Mh<PssmltProposal> {
 
 fn run(seed: u64, large_step: LargeStepMode) -> render::mlt::MltOutput {
     let cancel = AtomicBool::new(false);
-    render_mlt(
-        &[Toy { dark: false }],
+    MltDriver::new(&[Toy { dark: false }], &settings(seed, large_step)).run(
         kernel,
-        &settings(seed, large_step),
         &NoProgress,
         &cancel,
     )
@@ -136,13 +134,11 @@ fn pssmlt_driver_converges_to_the_closed_form() {
 #[test]
 fn a_scene_without_light_gives_a_black_image_and_a_message() {
     let cancel = AtomicBool::new(false);
-    let out = render_mlt(
+    let out = MltDriver::new(
         &[Toy { dark: true }],
-        kernel,
         &settings(1, LargeStepMode::Fixed(0.3)),
-        &NoProgress,
-        &cancel,
-    );
+    )
+    .run(kernel, &NoProgress, &cancel);
     assert!(out
         .message
         .as_deref()

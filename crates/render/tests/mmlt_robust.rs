@@ -31,8 +31,8 @@ use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::BdptParams;
 use render::image::Image;
 use render::mlt::{
-    mmlt_depth_normalization, render_mlt_normalized, render_mlt_with_estimator, LargeStepMode,
-    MltBudget, MltEstimator, MltOutput, MltSettings, MmltTarget, PATH_STREAMS,
+    mmlt_depth_normalization, LargeStepMode, MltBudget, MltDriver, MltEstimator, MltOutput,
+    MltSettings, MmltTarget, PATH_STREAMS,
 };
 use render::scene::Scene;
 use render::session::NoProgress;
@@ -105,18 +105,13 @@ fn mmlt_normalized(
     let targets = MmltTarget::all_depths(scene, params(), w, h);
     let cancel = AtomicBool::new(false);
     let out = match normalization {
-        Some(nb) => render_mlt_normalized(
-            &targets,
-            kernel,
-            &settings,
-            estimator,
-            nb,
-            &NoProgress,
-            &cancel,
-        ),
-        None => {
-            render_mlt_with_estimator(&targets, kernel, &settings, estimator, &NoProgress, &cancel)
-        }
+        Some(nb) => MltDriver::new(&targets, &settings)
+            .estimator(estimator)
+            .normalized(nb)
+            .run(kernel, &NoProgress, &cancel),
+        None => MltDriver::new(&targets, &settings)
+            .estimator(estimator)
+            .run(kernel, &NoProgress, &cancel),
     };
     assert!(out.message.is_none(), "{:?}", out.message);
     assert_finite_non_negative(&out.image, "MMLT");
@@ -218,7 +213,7 @@ fn one_chain_per_depth_needs_the_per_depth_scale() {
 }
 
 /// Each depth's integral from 20 000 all-strategy BDPT samples instead of the bootstrap
-/// (`render_mlt_normalized`): consistent (the start bias of importance resampling is far
+/// (`MltDriver::normalized`): consistent (the start bias of importance resampling is far
 /// below this test's resolution), so it must match the reference; the negative control, the
 /// same normalisation shifted by one depth (`b_d` of depth `d + 1` for depth `d`), must not.
 #[test]
@@ -280,14 +275,12 @@ fn strategy_strata_match_the_analytic_enclosure() {
                 streams: PATH_STREAMS,
                 stage_map: false,
             };
-            let out = render_mlt_with_estimator(
+            let out = MltDriver::new(
                 &MmltTarget::all_depths(&scene, enclosure_params, 16, 16),
-                kernel,
                 &settings,
-                estimator(ChainAllocation::PerTarget, true),
-                &NoProgress,
-                &AtomicBool::new(false),
-            );
+            )
+            .estimator(estimator(ChainAllocation::PerTarget, true))
+            .run(kernel, &NoProgress, &AtomicBool::new(false));
             out.image.mean()[0]
         })
         .collect();

@@ -24,7 +24,7 @@ use pathspace::{Path, PerturbationKind};
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
 use render::mlt::pathmlt::{self, IndependentPaths, PathMltTarget};
-use render::mlt::{render_mlt_with_states, LargeStepMode, MltBudget, MltOutput, MltSettings};
+use render::mlt::{LargeStepMode, MltBudget, MltDriver, MltOutput, MltSettings};
 use render::pathspace_scene::PathSpaceScene;
 use render::scene::Scene;
 use render::session::NoProgress;
@@ -182,15 +182,15 @@ fn negative_control_bootstrap_without_inverse_pdf_fails() {
     let images: Vec<Image> = (0..R as u64)
         .map(|r| {
             let s = settings(&scene, 3000 + r, 32.0);
-            let out = render_mlt_with_states(
-                &targets,
-                &states,
-                |_| Mh::new(mutation.clone()),
-                |_| NoAdaptation,
-                &s,
-                &NoProgress,
-                &AtomicBool::new(false),
-            );
+            let out = MltDriver::new(&targets, &s)
+                .states(&states)
+                .run(
+                    |_| Mh::new(mutation.clone()),
+                    |_| NoAdaptation,
+                    &NoProgress,
+                    &AtomicBool::new(false),
+                )
+                .0;
             check_output(&out, &s, "without 1/p");
             out.image
         })

@@ -22,7 +22,7 @@ use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
 use render::methods::{MethodSettings, MmltSettings, PssmltSettings};
 use render::mlt::{
-    render_mlt, LargeStepMode, MltBudget, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS,
+    LargeStepMode, MltBudget, MltDriver, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS,
 };
 use render::scene::Scene;
 use render::session::{render, IntegratorKind, NoProgress, RenderSettings};
@@ -105,23 +105,17 @@ fn pssmlt_and_mmlt_with_raster_steps_match_bdpt_on_the_cornell_box() {
         let images: Vec<Image> = (0..R as u64)
             .map(|r| {
                 let s = mlt_settings(31_000 + r, mpp);
-                let out = if what.starts_with("PSSMLT") {
-                    render_mlt(
-                        &[PssmltTarget::new(&scene, params(), SIDE, SIDE)],
-                        kernel,
-                        &s,
-                        &NoProgress,
-                        &cancel,
-                    )
-                } else {
-                    render_mlt(
-                        &MmltTarget::all_depths(&scene, params(), SIDE, SIDE),
-                        kernel,
-                        &s,
-                        &NoProgress,
-                        &cancel,
-                    )
-                };
+                let out =
+                    if what.starts_with("PSSMLT") {
+                        MltDriver::new(&[PssmltTarget::new(&scene, params(), SIDE, SIDE)], &s).run(
+                            kernel,
+                            &NoProgress,
+                            &cancel,
+                        )
+                    } else {
+                        MltDriver::new(&MmltTarget::all_depths(&scene, params(), SIDE, SIDE), &s)
+                            .run(kernel, &NoProgress, &cancel)
+                    };
                 assert!(out.message.is_none(), "{what}: {:?}", out.message);
                 assert!(out.b.is_finite() && out.b > 0.0);
                 assert_finite_non_negative(&out.image, what);

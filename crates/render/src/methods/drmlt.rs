@@ -17,7 +17,7 @@ use crate::bdpt::{BdptParams, Roulette};
 use crate::error::RenderError;
 use crate::mlt::dr::{self, DrBase, DrVariant};
 use crate::mlt::mala::{self, MalaConfig};
-use crate::mlt::{self, MltOutput, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS};
+use crate::mlt::{self, MltDriver, MltOutput, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS};
 use crate::scene::Scene;
 
 /// `drmlt`'s settings.
@@ -159,30 +159,24 @@ where
     T::Payload: SplatPayload,
 {
     match variant {
-        DrVariant::Orbital => mlt::render_mlt(
-            targets,
+        DrVariant::Orbital => MltDriver::new(targets, mlt_settings).run(
             mlt::PerChain(|slot: ChainSlot, p| {
                 dr::orbital_kernel(layout, base, p, slot.target as u32)
             }),
-            mlt_settings,
             progress,
             cancel,
         ),
-        DrVariant::TierneyMira => mlt::render_mlt(
-            targets,
+        DrVariant::TierneyMira => MltDriver::new(targets, mlt_settings).run(
             mlt::PerChain(|slot: ChainSlot, p| {
                 dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
             }),
-            mlt_settings,
             progress,
             cancel,
         ),
-        DrVariant::GreenMira => mlt::render_mlt(
-            targets,
+        DrVariant::GreenMira => MltDriver::new(targets, mlt_settings).run(
             mlt::PerChain(|slot: ChainSlot, p| {
                 dr::green_mira_kernel(layout, base, p, slot.target as u32)
             }),
-            mlt_settings,
             progress,
             cancel,
         ),

@@ -10,7 +10,7 @@ use super::{
 };
 use crate::bdpt::{BdptParams, Roulette};
 use crate::error::RenderError;
-use crate::mlt::{self, MltEstimator, MmltTarget, PATH_STREAMS};
+use crate::mlt::{self, MltDriver, MltEstimator, MmltTarget, PATH_STREAMS};
 use crate::scene::Scene;
 use mcmc_core::render_loop::ChainAllocation;
 use pss::RasterParams;
@@ -125,31 +125,23 @@ impl Method for MmltSettings {
             .flatten();
         let targets = MmltTarget::all_depths(scene, params, w, h);
         let make_kernel = |p: f64| kernel.with_large_step(p);
-        let (out, spent) = if let Some((nb, spent)) = &normalization {
-            let budgeted = mlt::MltSettings {
-                budget: remaining(mlt_settings.budget, *spent),
-                ..mlt_settings
-            };
-            let out = mlt::render_mlt_normalized(
-                &targets,
-                make_kernel,
-                &budgeted,
-                estimator,
-                nb,
-                run.progress,
-                run.cancel,
-            );
-            (out, *spent)
-        } else {
-            let out = mlt::render_mlt_with_estimator(
-                &targets,
-                make_kernel,
-                &mlt_settings,
-                estimator,
-                run.progress,
-                run.cancel,
-            );
-            (out, std::time::Duration::ZERO)
+        let driver = MltDriver::new(&targets, &mlt_settings).estimator(estimator);
+        let (out, spent) = match &normalization {
+            Some((nb, spent)) => {
+                let budgeted = mlt::MltSettings {
+                    budget: remaining(mlt_settings.budget, *spent),
+                    ..mlt_settings
+                };
+                let out = MltDriver::new(&targets, &budgeted)
+                    .estimator(estimator)
+                    .normalized(nb)
+                    .run(make_kernel, run.progress, run.cancel);
+                (out, *spent)
+            }
+            None => (
+                driver.run(make_kernel, run.progress, run.cancel),
+                std::time::Duration::ZERO,
+            ),
         };
         let mut output = mcmc_output(out, notes, run.start.elapsed());
         if let Some(stats) = output.mcmc.as_mut() {

@@ -10,7 +10,7 @@ use super::{
 use crate::bdpt::{BdptParams, Roulette};
 use crate::error::RenderError;
 use crate::mlt::direct::{self, DirectPass};
-use crate::mlt::{self, MltEstimator, PssmltTarget, PATH_STREAMS};
+use crate::mlt::{MltDriver, MltEstimator, PssmltTarget, PATH_STREAMS};
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use mcmc_core::render_loop::ChainAllocation;
@@ -176,14 +176,9 @@ impl Method for PssmltSettings {
         let targets = [
             PssmltTarget::new(scene, params, common.width, common.height).with_min_depth(min_depth),
         ];
-        let out = mlt::render_mlt_with_estimator(
-            &targets,
-            |p: f64| kernel.with_large_step(p),
-            &mlt_settings,
-            estimator,
-            run.progress,
-            run.cancel,
-        );
+        let out = MltDriver::new(&targets, &mlt_settings)
+            .estimator(estimator)
+            .run(|p: f64| kernel.with_large_step(p), run.progress, run.cancel);
         let chains_ran = out.mutations > 0;
         let mut output = mcmc_output(out, notes, run.start.elapsed());
         if let Some(d) = direct {

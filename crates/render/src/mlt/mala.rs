@@ -483,18 +483,16 @@ pub fn render(
         .into_iter()
         .map(|t| DifferentiableMmlt::new(t, config.fd_step).with_method(config.gradient))
         .collect();
-    super::render_mlt_per_chain(
-        &targets,
-        |slot, p| {
+    super::MltDriver::new(&targets, settings).run_with_controller(
+        super::PerChain(|slot: mcmc_core::render_loop::ChainSlot, p| {
             let depth = targets[slot.target].depth();
             if cheap_then_expensive {
                 cheap_then_expensive_kernel(config, depth, small, p)
             } else {
                 mala_kernel(config, depth, small, p)
             }
-        },
+        }),
         |_| CacheSharing,
-        settings,
         progress,
         cancel,
     )

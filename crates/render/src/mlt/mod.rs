@@ -3,6 +3,7 @@
 
 pub mod direct;
 pub mod dr;
+mod driver;
 pub mod mala;
 mod path_sampler;
 pub mod pathmlt;
@@ -10,13 +11,12 @@ mod run;
 mod stage_map;
 mod strata;
 
+pub use driver::{GivenStates, MltDriver, PrimarySamples};
 pub use path_sampler::{
     mmlt_depth_normalization, MmltTarget, PathPayload, PssmltTarget, PATH_STREAMS,
 };
 pub use run::{
-    render_mlt, render_mlt_normalized, render_mlt_per_chain, render_mlt_with_estimator,
-    render_mlt_with_states, render_mlt_with_states_rounds, LargeStepMode, MakeKernel, MltBudget,
-    MltEstimator, MltOutput, MltSettings, PerChain,
+    LargeStepMode, MakeKernel, MltBudget, MltEstimator, MltOutput, MltSettings, PerChain,
 };
 pub use stage_map::StagedSplats;
 pub use strata::MmltStrata;

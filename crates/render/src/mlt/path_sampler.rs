@@ -119,7 +119,7 @@ impl Target for PssmltTarget<'_> {
 }
 
 /// Multiplexed MLT target for one path depth (Hachisuka et al. 2014, section 4): one strategy
-/// per sample, chosen from the connection stream; `render_mlt` runs one such target per depth
+/// per sample, chosen from the connection stream; `MltDriver` runs one such target per depth
 /// `0..=max_depth` and distributes chains over depths in proportion to their bootstrap weight.
 #[derive(Clone, Copy, Debug)]
 pub struct MmltTarget<'s> {

@@ -18,9 +18,8 @@ use pathspace::{
 };
 use rand::SeedableRng;
 
-use super::run::{
-    render_mlt_with_states, render_mlt_with_states_rounds, MltBudget, MltOutput, MltSettings,
-};
+use super::run::{MltBudget, MltOutput, MltSettings};
+use super::MltDriver;
 use crate::error::RenderError;
 use crate::pathspace_scene::PathSpaceScene;
 
@@ -273,15 +272,13 @@ pub fn render(
     let kernel_proto = mutation(&view, kind, PATHMLT_SIGMA, max_depth)?;
     let targets = [PathMltTarget::new(&view, settings.width, settings.height)];
     let states = IndependentPaths { sampler };
-    Ok(render_mlt_with_states(
-        &targets,
-        &states,
+    let (out, _) = MltDriver::new(&targets, settings).states(&states).run(
         |_| Mh::new(kernel_proto.clone()),
         |_| NoAdaptation,
-        settings,
         progress,
         cancel,
-    ))
+    );
+    Ok(out)
 }
 
 /// The regional-adaptation parameters of `--adapt` for a render of `settings`: the paper's
@@ -391,16 +388,15 @@ pub fn render_adaptive_with_params(
     let controller = SharedRegionalAdaptation::new(*params).map_err(bad)?;
     let targets = [PathMltTarget::new(&view, settings.width, settings.height)];
     let states = IndependentPaths { sampler };
-    let (mut out, pooled) = render_mlt_with_states_rounds(
-        &targets,
-        &states,
-        |_| Mh::new(kernel_proto.clone()),
-        |_| controller.clone(),
-        settings,
-        ADAPT_ROUND_MUTATIONS,
-        progress,
-        cancel,
-    );
+    let (mut out, pooled) = MltDriver::new(&targets, settings)
+        .states(&states)
+        .round_mutations(ADAPT_ROUND_MUTATIONS)
+        .run(
+            |_| Mh::new(kernel_proto.clone()),
+            |_| controller.clone(),
+            progress,
+            cancel,
+        );
     let map = pooled.as_ref().and_then(|p| {
         p.sigmas()
             .map(|s| s.get().screen_sigma_map(settings.width, settings.height))
