@@ -104,7 +104,7 @@ pub struct McmcStats {
     /// ([`AcceptanceStats::stage_acceptance_rate`]).
     pub acceptance: AcceptanceStats,
     /// The automatic large-step estimate (`eta_s`, `eta_l`, `eta_0`, `p_l`; Zsolnai &
-    /// Szirmay-Kalos 2013, section 3), if automatic control ran to the end of its phase.
+    /// Szirmay-Kalos 2013, section 2), if automatic control ran to the end of its phase.
     pub large_step: Option<LargeStepEstimate>,
     /// The large-step probability after any estimation phase.
     pub large_step_probability: f64,

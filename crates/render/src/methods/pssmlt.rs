@@ -88,7 +88,7 @@ impl PssmltSettings {
         }
     }
 
-    /// Automatic large-step control (Zsolnai & Szirmay-Kalos 2013, section 3) on
+    /// Automatic large-step control (Zsolnai & Szirmay-Kalos 2013, section 2) on
     /// [`PssmltSettings::kelemen2002`]: every chain runs 1000 mutations at probability 0.5,
     /// the pooled `eta_s`, `eta_l`, `eta_0` give `p_l = eta_s / (2 (eta_s - eta_l))` (0.25 if
     /// `eta_l / eta_0 <= 0.1`), fixed for the rest of the render.

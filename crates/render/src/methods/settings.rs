@@ -203,7 +203,7 @@ impl ChainSettings {
     }
 
     /// These settings with automatic large-step control (Zsolnai & Szirmay-Kalos 2013,
-    /// section 3): [`AUTO_LARGE_STEP_ESTIMATION`] mutations per chain at probability
+    /// section 2): [`AUTO_LARGE_STEP_ESTIMATION`] mutations per chain at probability
     /// `initial`, then the estimated probability.
     #[must_use]
     pub const fn with_auto_large_step(self, initial: f64) -> Self {
