@@ -308,7 +308,7 @@ mod tests {
         assert_eq!(t.headers()[0], "method");
         assert_eq!(t.headers().last().unwrap(), "relMSE / baseline");
         assert_eq!(t.rows()[0][1], "0.0300 [0.0200, 0.0400]");
-        assert_eq!(t.rows()[0][5], "1500");
+        assert_eq!(t.rows()[0][5], "750");
         assert_eq!(t.rows()[0][6], "-", "no acceptance for the baseline");
         assert_eq!(t.rows()[1][6], "0.375");
         assert_eq!(t.rows()[0][7], "1.00 (base)");
