@@ -43,6 +43,10 @@ const MAX_SECONDS: f64 = 86_400.0;
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug, Default, PartialEq, Parser)]
+#[command(
+    about = "A chainlight paper example: compares methods over seeds on the bundled scenes.",
+    long_about = None
+)]
 pub struct CommonOptions {
     /// Smoke run: small images, short budgets, few seeds and scenes (explicit flags win).
     #[arg(long)]
@@ -65,8 +69,8 @@ pub struct CommonOptions {
     #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub size: Option<u32>,
     /// Render threads per render.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
-    pub threads: Option<u16>,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
     /// Output directory: results.md, results.csv and one run directory per scene.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -121,7 +125,7 @@ impl CommonOptions {
                 .unwrap_or_else(|| quick.map_or(defaults.size, |q| q.size)),
             threads: self
                 .threads
-                .map(usize::from)
+                .map(|t| t as usize)
                 .or(defaults.threads)
                 .unwrap_or_else(all_cores),
             out: self.out.clone().unwrap_or_else(|| defaults.out.clone()),
@@ -157,9 +161,23 @@ where
 /// default and `--quick` value.
 fn with_defaults(command: clap::Command, d: &Defaults) -> clap::Command {
     let q = &d.quick;
-    let (time, spp) = match d.regime {
-        Regime::EqualTime(t) => (format!("{} s", t.as_secs_f64()), "-".to_owned()),
-        Regime::EqualSamples(n) => ("-".to_owned(), n.to_string()),
+    // Each regime flag names its own default, or points at the other one.
+    let regime_note = |regime: Regime, quick: Regime, time: bool| {
+        let value = |r: Regime| match (r, time) {
+            (Regime::EqualTime(t), true) => Some(t.as_secs_f64().to_string()),
+            (Regime::EqualSamples(n), false) => Some(n.to_string()),
+            _ => None,
+        };
+        let other = if time {
+            "equal samples, see --spp"
+        } else {
+            "equal time, see --time"
+        };
+        let default = value(regime).unwrap_or_else(|| other.to_owned());
+        match value(quick) {
+            Some(v) => format!("[default: {default}; --quick: {v}]"),
+            None => format!("[default: {default}]"),
+        }
     };
     let scenes = if d.scenes.is_empty() {
         "every bundled scene".to_owned()
@@ -167,8 +185,8 @@ fn with_defaults(command: clap::Command, d: &Defaults) -> clap::Command {
         d.scenes.join(" ")
     };
     let notes = [
-        ("time", format!("[default: {time}; --quick: {}]", q.regime)),
-        ("spp", format!("[default: {spp}]")),
+        ("time", regime_note(d.regime, q.regime, true)),
+        ("spp", regime_note(d.regime, q.regime, false)),
         (
             "seeds",
             format!("[default: {}; --quick: {}]", d.seeds, q.seeds),
@@ -311,8 +329,9 @@ mod tests {
         let d = defaults();
         let e = try_parse_from::<CommonOptions, _, _>(&d, ["test", "--help"]).unwrap_err();
         let help = e.to_string();
+        assert!(help.contains("[default: 2]"), "{help}");
         assert!(
-            help.contains("[default: 2 s; --quick: equal samples: 4"),
+            help.contains("[default: equal time, see --time; --quick: 4]"),
             "{help}"
         );
         assert!(help.contains("[default: a b; --quick: q]"), "{help}");
