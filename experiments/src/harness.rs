@@ -14,7 +14,7 @@ use crate::plan::Plan;
 use crate::record::RunRecord;
 use crate::report::{current_commit, ConvergencePoint};
 use crate::results::Results;
-use crate::rundir::{manifest, RunDirectory};
+use crate::rundir::{scene_manifest, RunDirectory};
 use crate::scene::SceneCase;
 use crate::stats::run_stats;
 use crate::ExperimentError;
@@ -384,7 +384,7 @@ impl<'a> Experiment<'a> {
         if let Some(f) = &self.scene_parameters {
             parameters.extend(f(results, &case.name));
         }
-        let manifest = manifest(
+        let manifest = scene_manifest(
             format!("{}: {}", plan.name, case.name),
             results.commit.clone(),
             parameters,

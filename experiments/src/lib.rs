@@ -85,7 +85,7 @@ pub use plan::{Defaults, Plan, Quick};
 pub use record::{Measure, RunRecord};
 pub use regime::Regime;
 pub use results::Results;
-pub use rundir::{manifest, RunDirectory};
+pub use rundir::{scene_manifest, RunDirectory};
 pub use scene::{bundled_scene_names, SceneCase, SCENES_DIR};
 pub use stats::{run_stats, LargeStepStats, RunStats};
 pub use table::{median, median_range, ratio, Table};

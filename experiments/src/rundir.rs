@@ -102,7 +102,7 @@ impl RunDirectory {
 /// samples over seeds from `records` (other scenes' records are ignored), its own parameters
 /// and the medians of its statistics over seeds.
 #[must_use]
-pub fn manifest(
+pub fn scene_manifest(
     title: String,
     commit: String,
     parameters: BTreeMap<String, String>,
@@ -235,7 +235,7 @@ mod tests {
             ..records[0].clone()
         });
         let params = [("size".to_string(), "12x8".to_string())].into();
-        let m = manifest("t: s".into(), "abc".into(), params, "s", &methods, &records);
+        let m = scene_manifest("t: s".into(), "abc".into(), params, "s", &methods, &records);
         assert_eq!(m.methods.len(), 2);
         assert_eq!(m.methods[1].images[0].path, PathBuf::from("B_b_seed3.exr"));
         assert_eq!(m.methods[0].parameters["k"], "1");
