@@ -20,7 +20,7 @@
 //! mutations per second). Writes `results.md`, `results.csv` and the seed-0 images (EXR and
 //! PNG) of every method to `--out` (default `target/drmlt`), and per scene a run directory
 //! (`<out>/<scene>/`: every seed's EXR, `run.json`) with a self-contained `report.html`
-//! (`chainlight::report`; equal time, so each seed contributes one error-vs-time sample).
+//! (`experiments::report`; equal time, so each seed contributes one error-vs-time sample).
 //!
 //! The toy: the mixture of uniforms of eq. 8 (alpha = 1/10, beta = 1), MH with sigma 1 and
 //! 0.1 and Tierney-Mira DR (sigma 1 then 0.1): acceptance, integrated autocorrelation time
@@ -36,7 +36,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use chainlight::report::{
+use experiments::report::{
     current_commit, write_report, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest,
     SeedImage,
 };

@@ -17,7 +17,7 @@
 //! seeds with the min-max range; also mutations per second and acceptance. Writes
 //! `results.md`, `results.csv` and the seed-0 images (EXR and PNG) of every method to `--out`
 //! (default `target/langevin`), and per scene a run directory (`<out>/<scene>/`: every seed's
-//! EXR, `run.json`) with a self-contained `report.html` (`chainlight::report`; each seed is one
+//! EXR, `run.json`) with a self-contained `report.html` (`experiments::report`; each seed is one
 //! error-vs-time sample). docs/methods/mala.md reports a run.
 //!
 //! `cargo run --release --example langevin -- [--time 3 | --spp N] [--seeds 5] [--size 64]
@@ -29,7 +29,7 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use chainlight::report::{
+use experiments::report::{
     current_commit, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest, SeedImage,
 };
 use render::image::Image;

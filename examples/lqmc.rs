@@ -22,7 +22,7 @@
 //! pixels, more for clumps). Writes `results.md`, `results.csv`,
 //! the seed-0 images of every method (EXR and PNG) and the reference PNG to `--out`
 //! (default `target/lqmc`), and per scene a run directory (`<out>/<scene>/`: every seed's EXR,
-//! `run.json`) with a self-contained `report.html` (`chainlight::report`; each seed is one
+//! `run.json`) with a self-contained `report.html` (`experiments::report`; each seed is one
 //! error-vs-time sample).
 //!
 //! `cargo run --release --example lqmc -- [--time 2] [--seeds 10] [--size 64] [--out DIR]
@@ -33,7 +33,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use chainlight::report::{
+use experiments::report::{
     current_commit, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest, SeedImage,
 };
 use lqmc::{torus_difference, Rank1Lattice, ShiftedLattice};

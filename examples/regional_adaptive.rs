@@ -42,7 +42,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use chainlight::report::{
+use experiments::report::{
     current_commit, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest, SeedImage,
 };
 use pathspace::regional::RegionalAdaptParams;

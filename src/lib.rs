@@ -8,7 +8,9 @@
 //! | [`pathspace`] | path-space perturbations and partitions |
 //! | [`lqmc`] | rank-1 lattices and local quasi-Monte Carlo |
 //! | [`render`] | the reference renderer: scenes, BVH, materials, PT / BDPT, film, EXR/PNG, the MCMC integrators |
-//! | [`report`] | self-contained HTML comparison reports (`chainlight report`) |
+//!
+//! The paper examples' harness and the HTML report of `chainlight report` live in the
+//! workspace's `experiments` package (not published).
 //!
 //! # Example
 //! ```
@@ -33,8 +35,6 @@
 //!     .unwrap();
 //! assert!(out.image.mean_luminance() > 0.0);
 //! ```
-
-pub mod report;
 
 /// Local quasi-Monte Carlo: rank-1 lattices.
 pub use lqmc;

@@ -5,7 +5,7 @@ use std::process::{Command, Output};
 
 use render::image::Image;
 use render::image_io::{read_exr, write_exr};
-use render::integrator::{IntegratorInfo, INTEGRATORS};
+use render::{IntegratorInfo, INTEGRATORS};
 
 fn chainlight(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_chainlight"))
@@ -333,7 +333,7 @@ fn ctrl_c_under_spp_is_prompt_for_every_integrator() {
             &["render", "--integrator", info.name, "--spp", "1000000"][..],
             &size,
             &["--threads", "2", "-o", path_str(&out)],
-            if info.kind == render::integrator::IntegratorKind::PathMlt {
+            if info.kind == render::IntegratorKind::PathMlt {
                 &pathmlt[..]
             } else if info.is_mcmc {
                 &mcmc[..]

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use chainlight::report::{
+use experiments::report::{
     find_external_urls, write_report, ConvergencePoint, ConvergenceSeries, MethodRun, ReportError,
     RunManifest, SeedImage,
 };

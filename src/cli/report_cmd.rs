@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use chainlight::report::{self, RunManifest, MANIFEST_FILE};
 use clap::Args;
+use experiments::report::{self, RunManifest, MANIFEST_FILE};
 
 use super::CliResult;
 

@@ -7,7 +7,7 @@
 ///
 /// # Example
 /// ```
-/// use chainlight::report::find_external_urls;
+/// use experiments::report::find_external_urls;
 ///
 /// assert!(find_external_urls(r#"<img src="data:image/png;base64,AAAA">"#).is_empty());
 /// assert_eq!(find_external_urls(r#"<img src="https://example.org/a.png">"#).len(), 1);

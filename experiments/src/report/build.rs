@@ -9,8 +9,8 @@ use render::metrics;
 use serde::Serialize;
 
 use super::manifest::{resolve, RunManifest};
-use super::plot::{self, Curves};
 use super::ReportError;
+use crate::plot::{self, Axes, Curve};
 
 /// The page template (HTML, CSS and script; no external resources).
 const TEMPLATE: &str = include_str!("report.html.j2");
@@ -186,15 +186,20 @@ pub(crate) fn render_html(manifest: &RunManifest, run_dir: &Path) -> Result<Stri
         }
     }
 
-    let curves: Vec<Curves<'_>> = manifest
+    let curves: Vec<Curve> = manifest
         .methods
         .iter()
-        .map(|m| Curves {
-            name: &m.name,
-            series: &m.convergence,
+        .map(|m| Curve {
+            name: m.name.clone(),
+            series: m
+                .convergence
+                .iter()
+                .map(|s| s.points.iter().map(|p| (p.time_s, p.relmse)).collect())
+                .collect(),
         })
         .collect();
-    let convergence_svg = plot::convergence_svg(&curves).map_err(ReportError::Output)?;
+    let convergence_svg =
+        plot::log_log_svg(Axes::RELMSE_VS_TIME, &curves).map_err(ReportError::Output)?;
 
     let data = PixelData {
         width,

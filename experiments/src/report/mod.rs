@@ -4,24 +4,23 @@
 //! A report is built from a [`RunManifest`] — the `run.json` of a run directory an example wrote
 //! ([`RunManifest::load`]), or one assembled from loose EXR files ([`RunManifest::from_images`]).
 //! [`write_report`] computes the metrics with [`render::metrics`], draws the false-colour error
-//! maps with [`render::image_io::false_color_rgb8`], plots convergence with plotters (SVG) and
+//! maps with [`render::image_io::false_color_rgb8`], plots convergence with [`crate::plot`] (SVG) and
 //! fills an HTML template with minijinja. Images are embedded as data URIs (PNG) and as base64
 //! float data for the exposure control and the pixel inspector, so the file stands alone.
 //!
 //! # Example
 //! ```no_run
-//! use chainlight::report::{write_report, RunManifest};
+//! use experiments::report::{write_report, RunManifest};
 //!
 //! let manifest = RunManifest::load("out/zsolnai/cornell-glass")?;
 //! let html = write_report(&manifest, "out/zsolnai/cornell-glass", "out/zsolnai/cornell-glass/report.html")?;
 //! println!("wrote {}", html.display());
-//! # Ok::<(), chainlight::report::ReportError>(())
+//! # Ok::<(), experiments::report::ReportError>(())
 //! ```
 
 mod build;
 mod check;
 mod manifest;
-mod plot;
 
 use std::path::PathBuf;
 

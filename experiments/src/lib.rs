@@ -1,0 +1,92 @@
+//! The paper examples' shared harness: command-line options, equal-time / equal-sample
+//! comparisons over seeds and scenes, run directories, tables and the self-contained HTML
+//! report (`chainlight report`).
+//!
+//! A paper example states *which methods* it compares; this package does everything else:
+//!
+//! | step | item |
+//! |---|---|
+//! | shared flags (`--quick`, `--time` / `--spp`, `--seeds`, `--size`, `--threads`, `--out`, `--no-report`, scenes) | [`CommonOptions`] (flatten it into your own `clap::Parser`), [`parse`], [`Defaults`], [`Quick`] → [`Plan`] |
+//! | a compared configuration | [`Method`]: a name and a [`render::session::RenderSettings`] template (or a closure of the [`RunContext`]) |
+//! | the comparison | [`Experiment`]: every seed × scene × method interleaved, under a [`Regime`], each render measured against the scene's reference ([`SceneCase`]) with the machine's [`LoadAverage`] |
+//! | per-run statistics | [`run_stats`] → [`RunStats`] (b, its standard error, acceptance, the large-step estimate, mutations) |
+//! | outputs | per scene a [`RunDirectory`] (images per seed, `run.json`, `report.html` via [`report`]); `results.md` ([`Results::markdown`], [`Table`]) and `results.csv` ([`Results::csv`]) |
+//! | plots | the report's convergence plot; [`plot::write_log_log_svg`] for an example's own |
+//!
+//! # How a paper example uses it
+//!
+//! 1. Declare its [`Defaults`] (scenes, regime, seeds, size, what `--quick` runs) and parse the
+//!    shared flags — [`parse::<CommonOptions>`](parse), or its own `Parser` with
+//!    `#[command(flatten)] common: CommonOptions` when it has flags of its own — into a
+//!    [`Plan`] ([`CommonOptions::plan`]).
+//! 2. List its comparison as [`Method`]s: paper presets on one footing, each a name and a
+//!    settings template. The harness sets only `width`, `height`, `budget`, `seed` and
+//!    `threads`; the integrator and its settings are the method's.
+//! 3. Run it: `Experiment::new(plan).methods(methods).baseline("...").run()?` renders, measures,
+//!    writes `<out>/<scene>/` with `run.json` and `report.html`, and returns [`Results`].
+//! 4. `results.write(&extra)` writes `results.md` (a table per scene: medians over seeds,
+//!    ratios to the baseline) with the example's own tables appended, and `results.csv`.
+//!
+//! # Example
+//!
+//! Two methods, two seeds, equal samples, on the built-in Cornell box at 16 x 16 (the paper
+//! examples load the bundled scenes by name from the plan instead of [`Experiment::scenes`]).
+//!
+//! ```
+//! use experiments::{Defaults, Experiment, Measure, Method, Plan, Regime, SceneCase};
+//! use render::session::{IntegratorKind, RenderSettings};
+//!
+//! let out = std::env::temp_dir().join(format!("experiments-doc-{}", std::process::id()));
+//! let plan = Plan {
+//!     seeds: vec![1, 2],
+//!     size: 16,
+//!     threads: 1,
+//!     out: out.clone(),
+//!     ..Plan::from_defaults(&Defaults::new("doc", Regime::EqualSamples(4)))
+//! };
+//! let method = |name: &str, integrator: IntegratorKind| {
+//!     let method = integrator.settings();
+//!     Method::new(name, RenderSettings { method, max_depth: 5, ..RenderSettings::default() })
+//! };
+//! let results = Experiment::new(plan)
+//!     .methods([method("PT", IntegratorKind::Pt), method("BDPT", IntegratorKind::Bdpt)])
+//!     .baseline("PT")
+//!     .scenes(vec![SceneCase::cornell_box(16, 64)?])
+//!     .run()?;
+//! assert_eq!(results.records.len(), 4);
+//! assert!(results.median("cornell-box", "BDPT", Measure::RelMse) > 0.0);
+//! assert!(results.scene_table("cornell-box").to_markdown().contains("| BDPT |"));
+//! assert!(out.join("cornell-box/run.json").is_file() && out.join("cornell-box/report.html").is_file());
+//! # std::fs::remove_dir_all(&out).ok();
+//! # Ok::<(), experiments::ExperimentError>(())
+//! ```
+
+mod error;
+mod harness;
+mod load;
+mod method;
+mod options;
+mod plan;
+pub mod plot;
+mod record;
+mod regime;
+pub mod report;
+mod results;
+mod rundir;
+mod scene;
+mod stats;
+mod table;
+
+pub use error::ExperimentError;
+pub use harness::Experiment;
+pub use load::LoadAverage;
+pub use method::{Method, RunContext};
+pub use options::{parse, try_parse_from, CommonOptions};
+pub use plan::{Defaults, Plan, Quick};
+pub use record::{Measure, RunRecord};
+pub use regime::Regime;
+pub use results::Results;
+pub use rundir::{scene_manifest, RunDirectory};
+pub use scene::{bundled_scene_names, SceneCase, SCENES_DIR};
+pub use stats::{run_stats, LargeStepStats, RunStats};
+pub use table::{median, median_range, ratio, Table};
