@@ -18,45 +18,27 @@
 //! [--out DIR] [--no-report] [--quick] [scene ...]` (`--help` lists the shared flags).
 
 use experiments::{CommonOptions, Defaults, Experiment, Measure, Method, Regime, Results, Table};
-use render::methods::{ChainSettings, PssmltSettings};
+use render::methods::PssmltSettings;
 use render::mlt::LargeStepMode;
 use render::session::RenderSettings;
-
-/// Automatic control: measure at `p_l = 0.5` for 1000 mutations per chain, then set `p_l`.
-const AUTO: LargeStepMode = LargeStepMode::Auto {
-    initial: 0.5,
-    estimation_steps: 1_000,
-};
 
 /// The fixed large-step probabilities of the sweep.
 fn sweep() -> Vec<f64> {
     (1..=10).map(|i| f64::from(i) / 10.0).collect()
 }
 
-/// Kelemen et al. 2002's PSSMLT over BDPT ([`PssmltSettings::kelemen2002`]: the
-/// expected-value estimator, no raster steps, no direct pass) with `large_step`, max depth 5,
-/// 256 chains and 20 000 bootstrap samples; automatic control is
-/// [`PssmltSettings::zsolnai2013`].
-fn pssmlt(name: String, large_step: LargeStepMode) -> Method {
-    let mode = match large_step {
+/// PSSMLT over BDPT from a paper preset with 20 000 bootstrap samples, max depth 5: automatic
+/// control is [`PssmltSettings::zsolnai2013`] (1000 mutations per chain at `p_l = 0.5`, then
+/// section 2's `p_l`), the sweep [`PssmltSettings::kelemen2002`] at a fixed `p_l`.
+fn pssmlt(name: String, mut preset: PssmltSettings) -> Method {
+    preset.chain.bootstrap_samples = 20_000;
+    let mode = match preset.chain.large_step {
         LargeStepMode::Fixed(p) => format!("fixed p_large = {p}"),
         other => format!("{other:?}"),
     };
-    let preset = match large_step {
-        LargeStepMode::Auto { .. } => PssmltSettings::zsolnai2013(),
-        LargeStepMode::Fixed(_) => PssmltSettings::kelemen2002(),
-    };
     let settings = RenderSettings {
         max_depth: 5,
-        method: PssmltSettings {
-            chain: ChainSettings {
-                large_step,
-                bootstrap_samples: 20_000,
-                ..preset.chain
-            },
-            ..preset
-        }
-        .into(),
+        method: preset.into(),
         ..RenderSettings::default()
     };
     Method::new(name, settings).with_parameter("large step", mode)
@@ -68,12 +50,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Defaults::new("zsolnai_large_step", Regime::EqualSamples(64))
     };
     let plan = experiments::parse::<CommonOptions>(&defaults).plan(&defaults)?;
-    let mut methods = vec![pssmlt("auto".into(), AUTO)];
-    methods.extend(
-        sweep()
-            .into_iter()
-            .map(|p| pssmlt(format!("p_l={p:.1}"), LargeStepMode::Fixed(p))),
-    );
+    let mut methods = vec![pssmlt("auto".into(), PssmltSettings::zsolnai2013())];
+    methods.extend(sweep().into_iter().map(|p| {
+        let mut fixed = PssmltSettings::kelemen2002();
+        fixed.chain.large_step = LargeStepMode::Fixed(p);
+        pssmlt(format!("p_l={p:.1}"), fixed)
+    }));
     let results = Experiment::new(plan)
         .methods(methods)
         .baseline("auto")
