@@ -1,6 +1,6 @@
 //! Langevin MCMC on 2-D toys: the paper's Fig. 2 (an anisotropic ridge) and Fig. 4 (a
 //! disconnected Gaussian mixture), with acceptance and ESS per second per kernel
-//! (Luan et al. 2020, ../shared/papers/langevin-mcmc-rendering.txt, sections 4-6).
+//! (Luan et al. 2020, sections 4-6).
 //!
 //! ```sh
 //! cargo run --release --example langevin_toys            # writes target/langevin_toys/

@@ -1,4 +1,4 @@
-//! A separate direct-lighting pass for the MCMC integrators (issue 17, item 2; Mitsuba 0.6's
+//! A separate direct-lighting pass for the MCMC integrators (Mitsuba 0.6's
 //! PSSMLT/MLT `directSamples`, and the DRMLT reference implementation, which builds on it).
 //!
 //! The image splits exactly by path depth: `I = I_{depth <= K} + I_{depth > K}`. Direct
@@ -26,11 +26,8 @@
 //! integrator (depth 1 only); here it is the renderer's BDPT restricted to depth K, the same
 //! estimator family the chains use (every strategy of depths 0..=K with MIS, light tracing
 //! included), so the split needs no second light-transport code path. The default K = 2 (one
-//! bounce of indirect light in the pass too) was measured at equal time (docs/performance.md,
-//! "A deeper direct pass for PSSMLT"): against K = 1 it takes 16 % off PSSMLT's relMSE on
-//! cornell-glass and 11 % on ajar-door (every seed), and is level on caustic-pool (median; two
-//! seeds of six 20-26 % worse: there the depth-2 paths are caustics through the water, which
-//! the chains sample better than BDPT). K = 3 is 5-9x worse on caustic-pool.
+//! bounce of indirect light in the pass too) and its measurement against K = 1 and K = 3 are
+//! on docs/methods/pssmlt-mmlt.md and docs/performance.md.
 
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -104,9 +101,8 @@ pub enum DirectPass {
     },
 }
 
-/// [`DirectPass::Balanced`]'s default `kappa` (module comment of [`balanced_share`]): fitted
-/// on cornell-glass (0.022) and ajar-door (0.017) at equal time, docs/performance.md,
-/// "Balancing the direct pass against the chains".
+/// [`DirectPass::Balanced`]'s default `kappa` (module comment of [`balanced_share`]), fitted
+/// at equal time on two bundled scenes (docs/performance.md, "The current defaults and why").
 pub const BALANCE_KAPPA: f64 = 0.02;
 
 /// All-strategy BDPT samples of [`DirectPass::Balanced`]'s pilot (resolution-independent:
@@ -119,11 +115,10 @@ pub const BALANCE_SAMPLES: u64 = 16_384;
 pub const BALANCE_SHARE_RANGE: (f64, f64) = (0.02, 0.75);
 
 /// Direct samples per pixel per mutation per pixel that correspond to time odds of 1 (pass
-/// time = chain time) under a mutation budget: a depth-2 pass sample costs about 0.35 of a
-/// PSSMLT mutation at depth 10 on the bundled scenes (48-72 pass samples per pixel in 1.5 s
-/// against 93-146 mutations per pixel in 8.5 s, docs/performance.md, "A deeper direct pass
-/// for PSSMLT"), so `per_mutation = PER_MUTATION_PER_ODDS * s / (1 - s)` for a time share
-/// `s`; 15 % gives the previous default's half a sample per mutation.
+/// time = chain time) under a mutation budget, from the measured cost of a depth-2 pass
+/// sample relative to a PSSMLT mutation at depth 10 on the bundled scenes
+/// (docs/performance.md), so `per_mutation = PER_MUTATION_PER_ODDS * s / (1 - s)` for a time
+/// share `s`; 15 % gives half a sample per mutation.
 pub const PER_MUTATION_PER_ODDS: f64 = 0.5 * 0.85 / 0.15;
 
 /// The time share of a direct pass that minimises the relMSE of pass plus chains, when the
@@ -176,11 +171,10 @@ pub fn pass_light_share(per_depth: &[f64], depth: u32) -> Option<f64> {
 }
 
 impl DirectPass {
-    /// PSSMLT's default (`render::session::direct_pass_default`): [`DirectPass::Balanced`]
-    /// with [`BALANCE_KAPPA`], so the pass's share follows the scene's light (about 25 % of a
-    /// time budget on cornell-glass, 10 % on ajar-door, 15 % on caustic-pool). It replaced a
-    /// fixed 15 % (`DirectPass::with_time_share(0.15)`, `--direct-share 0.15`), measured in
-    /// docs/performance.md, "Balancing the direct pass against the chains".
+    /// PSSMLT's default (`render::methods::PssmltSettings::default`): [`DirectPass::Balanced`]
+    /// with [`BALANCE_KAPPA`], so the pass's share follows the scene's light. A fixed 15 % is
+    /// `DirectPass::with_time_share(0.15)` (`--direct-share 0.15`); the measurement is on
+    /// docs/methods/pssmlt-mmlt.md.
     pub const PSSMLT_DEFAULT: Self = Self::Balanced {
         kappa: BALANCE_KAPPA,
     };

@@ -1,4 +1,4 @@
-//! Delayed-rejection MLT (Rioux-Lavoie et al. 2020, ../shared/papers/delayed-rejection-mlt.txt)
+//! Delayed-rejection MLT (Rioux-Lavoie et al. 2020, docs/methods/drmlt.md)
 //! on the path samplers: the kernels of `mcmc_core::delayed_rejection` with the pairwise
 //! primary-sample-space stages of `pss` ([`pss::OnLayout`]).
 //!

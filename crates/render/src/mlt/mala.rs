@@ -1,4 +1,4 @@
-//! Langevin MLT (Luan et al. 2020, ../shared/papers/langevin-mcmc-rendering.txt) on the
+//! Langevin MLT (Luan et al. 2020, docs/methods/mala.md) on the
 //! multiplexed path sampler: MMLT's one-strategy-per-sample targets made differentiable, the
 //! kernels of `mcmc_core::langevin` moving their primary samples (`pss::langevin`), chains
 //! sharing their gradient caches through the render loop.
@@ -158,7 +158,7 @@ thread_local! {
 /// log luminance of the strategy's contribution with respect to the primary samples the path
 /// read ([`pss::langevin::PssCoordinates`] order).
 ///
-/// - [`GradientMethod::Dual`] (default, issue 11's design): the f32 evaluator gives the value
+/// - [`GradientMethod::Dual`] (default): the f32 evaluator gives the value
 ///   the chain uses; the differentiable evaluator [`crate::bdpt::diff`] replays the same path
 ///   in forward-mode dual numbers (one lane per coordinate read, 8/16/24/32 lanes) and gives
 ///   `d ln L / du = (dL/du) / L`. Where it does not apply it falls back to finite

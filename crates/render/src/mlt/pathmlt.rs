@@ -29,8 +29,8 @@ pub const PATHMLT_MAX_DEPTH: u32 = 63;
 /// The allowed `--max-depth` range, for error messages.
 const DEPTH_RANGE: &str = "0..=63 with --integrator pathmlt";
 
-/// The angular scale `sigma` (radians) of the lens and multi-chain perturbations: fixed (no
-/// regional adaptation yet, issue 13), for both the camera chain and later chains. The RA
+/// The angular scale `sigma` (radians) of the lens and multi-chain perturbations (FIXED, and
+/// the start of the adaptive variants), for both the camera chain and later chains. The RA
 /// paper starts its adaptation at `e^{1/2}` rad (section 8.1), which suits an adapted kernel;
 /// a fixed kernel needs a local scale: 0.02 rad is about a third of a pixel of a 40 degree,
 /// 16-pixel image and a few pixels at 256 pixels.

@@ -150,7 +150,7 @@ pub struct MltEstimator {
     pub large_step_mis: bool,
     /// How chains are spread over the targets (MMLT: depths): pbrt's joint resampling
     /// (default) or a fixed count per depth with splats scaled by `b_d / n_d`
-    /// (`mcmc_core::render_loop::ChainAllocation`; docs/performance.md, "MMLT robustness").
+    /// (`mcmc_core::render_loop::ChainAllocation`; docs/methods/pssmlt-mmlt.md).
     pub chain_allocation: ChainAllocation,
     /// MMLT only (targets in [`super::MmltTarget::all_depths`] order): stratify the
     /// bootstrap over the strategy choice, so every primary point of depth `d` is evaluated
