@@ -196,6 +196,7 @@ impl Scene {
         scene.rebuild_lights();
         scene
     }
+
     /// Loads a `.gltf` (with external or embedded buffers and images) or `.glb` file.
     ///
     /// # Errors

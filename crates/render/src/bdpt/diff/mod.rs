@@ -44,9 +44,12 @@
 //! ```
 
 mod bsdf;
+mod connect;
 mod geometry;
 mod path;
+mod subpath;
 mod texture;
+mod vertex;
 
 use glam::Vec2;
 

@@ -216,6 +216,7 @@ impl Loader<'_> {
         scene.warnings = warnings;
         Ok(scene)
     }
+
     /// Every node of the default scene (or of all root nodes if there is no scene) with its
     /// world transform, parents before children. A node reached twice is an error (the glTF
     /// node hierarchy must be a forest), which also rules out cycles.
