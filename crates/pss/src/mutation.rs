@@ -151,7 +151,8 @@ impl SmallMutation {
 /// value), by Acklam's rational approximation (relative error below 1.15e-9 over the whole
 /// range: far below what any statistical test of a chain can resolve). One uniform per
 /// Gaussian draw, and no logarithm or cosine in the central 95% of the range, where almost all
-/// draws fall: it replaced Box-Muller, whose `ln` and `cos` were 15% of an MMLT mutation.
+/// draws fall: it replaced Box-Muller, whose `ln` and `cos` were a large share of an MMLT
+/// mutation's cost (`docs/performance.md`, "Against the peer: rs_pbrt's MLT").
 #[inline]
 #[must_use]
 pub fn standard_normal_quantile(p: f64) -> f64 {

@@ -15,8 +15,8 @@ const RASTER_SALT: u64 = 0x7261_7374_6572_2121;
 
 /// Default raster-step probability (`--raster-mutation on`, and the renderer's PSSMLT
 /// default): the fraction of the small steps of [`crate::PssmltProposal`] that become raster
-/// steps. 0.5 beat 0.25 on three of four scenes at equal mutations (docs/performance.md,
-/// "Raster mutation (issue 17, item 2)").
+/// steps. Chosen over 0.25 by the equal-mutation comparison in `docs/performance.md`,
+/// "Raster mutation".
 pub const RASTER_DEFAULT_PROBABILITY: f64 = 0.5;
 
 /// Parameters of the raster mutation ([`RasterStep`]), in image units.

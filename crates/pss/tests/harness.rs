@@ -1,7 +1,7 @@
-//! The PSS mutations pass the `mcmc-core` correctness harness (issue 5, "Must show"):
-//! pairwise detailed balance, the exact finite-state check and stationarity from exact starts,
-//! on toy targets read from a primary-sample-space state, including targets with mass across
-//! the torus seam; and deliberately broken PSS proposals fail the same checks.
+//! The PSS mutations pass the `mcmc-core` correctness harness: pairwise detailed balance, the
+//! exact finite-state check and stationarity from exact starts, on toy targets read from a
+//! primary-sample-space state, including targets with mass across the torus seam; and
+//! deliberately broken PSS proposals fail the same checks.
 //!
 //! Run with `cargo test -p pss --release --test harness -- --nocapture` to see every
 //! statistic and p-value.

@@ -1,7 +1,7 @@
-//! The raster (image-plane) mutation passes the correctness harness (issue 17, item 2):
-//! pairwise balance, Hastings consistency, the finite-state check and stationarity from exact
-//! starts on toy targets with mass across the torus seam and on targets whose read set depends
-//! on the state; broken raster steps fail.
+//! The raster (image-plane) mutation passes the correctness harness: pairwise balance, Hastings
+//! consistency, the finite-state check and stationarity from exact starts on toy targets with
+//! mass across the torus seam and on targets whose read set depends on the state; broken raster
+//! steps fail.
 //!
 //! Run with `cargo test -p pss --release --test raster_step -- --nocapture` to see every
 //! statistic and p-value.

@@ -1,7 +1,8 @@
 //! Lazy PSS mutation leaves the target invariant when the set of coordinates the target reads
-//! depends on the state (issue 8, "Must show"): stationarity from exact starts for the Kelemen
-//! small step, the Gaussian small step and the PSSMLT mixture, on two targets of
-//! `pss::testing` whose read set varies, and a broken proposal fails the same test.
+//! depends on the state (`docs/methods/pssmlt-mmlt.md`, "Why lazy PSS is exact"): stationarity
+//! from exact starts for the Kelemen small step, the Gaussian small step and the PSSMLT
+//! mixture, on two targets of `pss::testing` whose read set varies, and a broken proposal fails
+//! the same test.
 //!
 //! Run with `cargo test -p pss --release --test read_set_stationarity -- --nocapture` to see
 //! every statistic and p-value.
@@ -17,10 +18,10 @@
 //! coordinates are brought up to date only when the target reads them. A chain outside the
 //! stripes (or with a short path) leaves `u1` (or `u_L`) unread for many accepted steps, and
 //! candidates that read it again are often rejected: exactly the situation where a lazy state
-//! that re-draws the current state's stale coordinates at every proposal is biased (the bug of
-//! issue 8). The final states are binned by the targets' exact bins, which bring the
-//! coordinates they look at up to date (for `Stripes` that includes `u1` where the target does
-//! not read it: it must be uniform there).
+//! that re-draws the current state's stale coordinates at every proposal is biased (the bug the
+//! exact lazy state fixed). The final states are binned by the targets' exact bins, which bring
+//! the coordinates they look at up to date (for `Stripes` that includes `u1` where the target
+//! does not read it: it must be uniform there).
 //!
 //! Kernels: Kelemen 2002's exponential small step (`[1/1024, 1/64]`), pbrt-v3's wrapped
 //! Gaussian small step (sigma 0.01), and the PSSMLT mixture of the Kelemen small step with the

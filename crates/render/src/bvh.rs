@@ -232,7 +232,7 @@ impl Bvh {
 /// origin): testing them against the backed-off ray with `tmin = BACKOFF` puts the rounding
 /// error of the test at the scale of the scene's coordinates, above the ray-origin offsets of
 /// [`offset_ray_origin`], and shadow rays then hit their own surface (found by
-/// `tests/bdpt_vs_pt.rs`: PT's direct light was up to 3x too dark on the Cornell box floor).
+/// `tests/bdpt_vs_pt.rs`: PT's direct light came out far too dark on the Cornell box floor).
 const BACKOFF: f32 = 2.5e-4;
 
 /// The obvhs rays for the segment `origin + t dir`, `0 <= t <= t_max`: the traversal ray,

@@ -1,5 +1,5 @@
 //! The differentiable path evaluator (`render::bdpt::diff`) against the f32 renderer and
-//! against itself (issue 11's Must-show):
+//! against itself (the checks `docs/methods/mala.md` reports):
 //!
 //! - **value**: on every bundled scene and depths 0..=4, at PSS states where the f32 MMLT
 //!   target carries light, the evaluator's f64 contribution (times the number of strategies)

@@ -1,10 +1,10 @@
-//! MMLT's robustness options (issue 17, item 3) on real scenes: the per-depth chain
-//! allocation (`ChainAllocation::PerTarget`) and the strategy-stratified bootstrap
-//! (`MmltStrata`) converge to the BDPT reference on the Cornell box, alone and together, with
-//! the default 256 chains and with 6 chains (one per depth: the allocation's weights
-//! `b_d / n_d` then carry everything); the negative control, the per-depth allocation scaled
-//! by `b / N` as the joint allocation is, fails; the stratified bootstrap's `b` matches the
-//! analytic enclosure; 1 and 2 threads give the same image.
+//! MMLT's robustness options (`docs/performance.md`, "MMLT robustness") on real scenes: the
+//! per-depth chain allocation (`ChainAllocation::PerTarget`) and the strategy-stratified
+//! bootstrap (`MmltStrata`) converge to the BDPT reference on the Cornell box, alone and
+//! together, with the default 256 chains and with 6 chains (one per depth: the allocation's
+//! weights `b_d / n_d` then carry everything); the negative control, the per-depth allocation
+//! scaled by `b / N` as the joint allocation is, fails; the stratified bootstrap's `b` matches
+//! the analytic enclosure; 1 and 2 threads give the same image.
 //!
 //! Statistics as in `mlt_convergence.rs` (module docs there): `R` replicate renders with
 //! independent seeds against `K` BDPT replicates, Welch t on the image mean and on 4 x 4

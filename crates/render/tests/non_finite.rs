@@ -1,8 +1,8 @@
-//! No lost samples on a scene with a small, very bright emissive quad over a diffuse floor
-//! (issue 16, item 5): for every integrator of the table, with the quad alone and with each
-//! kind of the other lights added (point, spot, directional, an environment map with hot
-//! texels), a render drops no sample as NaN/inf and its image is finite and lit; and a pixel
-//! sample's raster position stays inside its pixel.
+//! No lost samples on a scene with a small, very bright emissive quad over a diffuse floor: for
+//! every integrator of the table, with the quad alone and with each kind of the other lights
+//! added (point, spot, directional, an environment map with hot texels), a render drops no
+//! sample as NaN/inf and its image is finite and lit; and a pixel sample's raster position
+//! stays inside its pixel.
 //!
 //! What the issue saw: BDPT's "non-finite samples dropped" count was not NaN or inf at all, but
 //! finite camera-side contributions of pixel samples whose raster position `x + u` had rounded

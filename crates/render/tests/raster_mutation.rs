@@ -1,6 +1,6 @@
-//! The raster mutation (`pss::RasterStep`, `--raster-mutation`; issue 17, item 2) on a real
-//! scene: PSSMLT and MMLT with raster steps converge to the Cornell box's BDPT reference, and a
-//! render with raster steps is bit-identical for 1, 2 and 3 threads.
+//! The raster mutation (`pss::RasterStep`, `--raster-mutation`) on a real scene: PSSMLT and
+//! MMLT with raster steps converge to the Cornell box's BDPT reference, and a render with
+//! raster steps is bit-identical for 1, 2 and 3 threads.
 //!
 //! # Statistics
 //! As `mlt_convergence.rs` ("Cornell box against a BDPT reference"): `R` independent MCMC

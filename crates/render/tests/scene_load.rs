@@ -255,7 +255,7 @@ fn unsupported_features_are_warnings() {
     let mut v = embedded_json();
     let used = v["extensionsUsed"].as_array_mut().unwrap();
     used.push(Value::from("KHR_lights_punctual"));
-    // Supported since issue 16: KHR_texture_transform and normal maps; still unsupported:
+    // Supported: KHR_texture_transform and normal maps; unsupported:
     // clearcoat and occlusion textures (named in the one material warning).
     used.push(Value::from("KHR_materials_clearcoat"));
     v["materials"][0]["extensions"]["KHR_materials_clearcoat"] =
@@ -270,7 +270,7 @@ fn unsupported_features_are_warnings() {
     v["meshes"][1]["primitives"][0]["mode"] = Value::from(1); // lines
     let s = Scene::from_gltf_slice(&to_bytes(&v), None).unwrap();
     let all = s.warnings.join("\n");
-    // (KHR_lights_punctual is supported since issue 16: no warning needed.)
+    // (KHR_lights_punctual is supported: no warning needed.)
     for needle in [
         "KHR_materials_clearcoat",
         "occlusionTexture",

@@ -238,8 +238,8 @@ fn scenes_follow_the_conventions() {
 
 #[test]
 fn cornell_glass_matches_the_peer_scene() {
-    // ../shared/notes/peer-cornell-glass.pbrt: LookAt 0 1 3.5 -> 0 1 0, fov 39 (square film),
-    // light L = (17, 12, 4), glass ior 1.5
+    // The pbrt-v3 scene of the peer comparison (`docs/performance.md`, "Against the peer"):
+    // LookAt 0 1 3.5 -> 0 1 0, fov 39 (square film), light L = (17, 12, 4), glass ior 1.5
     for name in ["cornell", "cornell-glass"] {
         let (doc, _, _) = gltf::import(scene_path(name)).unwrap();
         let node = doc.nodes().find(|n| n.camera().is_some()).unwrap();

@@ -27,8 +27,8 @@
 //! caustic seen directly on the floor next to a glass sphere, `d(x1, x2)` (floor to glass) is
 //! short, and those weights hand almost all of the caustic to the camera path that happens to
 //! hit the light (strategy `s = 0`) instead of to light tracing (`t = 1`). On
-//! `scenes/cornell-glass` keeping the densities cuts BDPT's relMSE per sample to 0.66x
-//! (docs/performance.md, issue 17).
+//! `scenes/cornell-glass` keeping the densities lowers BDPT's relMSE per sample (measured in
+//! `docs/performance.md`, "Specular chains in BDPT's MIS weights").
 
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -62,7 +62,8 @@ pub enum SpecularDensities {
     #[default]
     Kept,
     /// pbrt-v3's `RandomWalk`: both densities zero, skipped by the ratios. Kept for
-    /// comparison (docs/performance.md, issue 17) and as the tests' negative control.
+    /// comparison (`docs/performance.md`, "Specular chains in BDPT's MIS weights") and as the
+    /// tests' negative control.
     Zeroed,
 }
 

@@ -24,8 +24,9 @@ const OTHER_STREAM_OFFSET: usize = 1 << 20;
 /// pixel's samples, and every point is uniform, so the estimate is unbiased. Dimension `d`
 /// of [`Stream::Camera`] is Halton dimension `d` (the path tracer's layout: pixel 2, lens 2,
 /// time 1, then 7 per bounce). We do not use [`lqmc::Scrambling::Owen`] here: it scrambles
-/// every digit down to `f64` resolution (about 50 hashes per number in base 2) and made the
-/// path tracer 8 times slower than with independent numbers; the rotation costs one hash.
+/// every digit down to `f64` resolution (about 50 hashes per number in base 2), which makes
+/// the path tracer several times slower than with independent numbers (`docs/performance.md`,
+/// "Halton QMC and LQMC"); the rotation costs one hash.
 ///
 /// # Example
 /// ```

@@ -1,5 +1,6 @@
 //! The Owen-scrambled Sobol sampler: per pixel, every draw of a path is a stratified
-//! low-discrepancy sequence over the pixel's samples (issue 17, item 2).
+//! low-discrepancy sequence over the pixel's samples (measured against independent numbers in
+//! `docs/performance.md`, "Owen-scrambled Sobol sampler for PT and BDPT").
 //!
 //! Construction: Burley 2020, "Practical Hash-based Owen Scrambling" (JCGT 9(4)), section 3
 //! (Laine-Karras-style hash as a nested uniform scramble) and section 4 ("padding" by shuffled
@@ -373,9 +374,10 @@ mod tests {
             e.iter().map(|x| (x - m).powi(2)).sum::<f64>() / e.len() as f64
         };
         // Independent: p(1-p)/16 = 0.0105. A scrambled (0, 4, 2)-net's variance on an
-        // indicator with a smooth boundary falls as n^(-3/2) instead of n^(-1): measured 0.32x
-        // here; each variance has a relative standard error of sqrt(2 / 4000) = 2.2 %, so
-        // half is far outside the noise on both sides.
+        // indicator with a smooth boundary falls as n^(-3/2) instead of n^(-1) (Owen 1997), an
+        // extra factor of about n^(-1/2) = 1/4 at the 16 samples here; each variance has a
+        // relative standard error of sqrt(2 / 4000) = 2.2 %, so half is far outside the noise
+        // on both sides.
         assert!(
             var(&sobol) < 0.5 * var(&independent),
             "{} vs {}",

@@ -1,8 +1,8 @@
-//! The differentiable path evaluator of Langevin MLT (Luan et al. 2020, section 6; issue 11's
-//! design): the contribution of ONE multiplexed-MLT strategy `(s, t)` of a fixed depth as a
-//! function of the primary samples, written once over [`Real`] so that it runs in `f64` (its
-//! reference value) and in forward-mode dual numbers ([`Dual`], one lane per primary sample
-//! the path reads) for the gradient of MALA.
+//! The differentiable path evaluator of Langevin MLT (Luan et al. 2020, section 6; the design
+//! is described in `docs/methods/mala.md`): the contribution of ONE multiplexed-MLT strategy
+//! `(s, t)` of a fixed depth as a function of the primary samples, written once over [`Real`]
+//! so that it runs in `f64` (its reference value) and in forward-mode dual numbers ([`Dual`],
+//! one lane per primary sample the path reads) for the gradient of MALA.
 //!
 //! # How it relates to the f32 renderer
 //! It restates `bdpt::sample_strategy` (camera subpath, light subpath, connection, MIS weight)
@@ -44,9 +44,12 @@
 //! ```
 
 mod bsdf;
+mod connect;
 mod geometry;
 mod path;
+mod subpath;
 mod texture;
+mod vertex;
 
 use glam::Vec2;
 
