@@ -38,14 +38,18 @@ mod mh;
 pub mod partition;
 mod progress;
 pub mod proposal;
+#[cfg(feature = "parallel")]
 pub mod render_loop;
 pub mod seed;
+pub mod special;
 pub mod stats;
 mod target;
 #[cfg(feature = "testing")]
 pub mod testing;
 pub mod torus;
+#[cfg(feature = "testing")]
 pub mod toy;
+pub mod tunable;
 
 pub use chain::Chain;
 

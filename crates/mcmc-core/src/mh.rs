@@ -2,10 +2,10 @@
 
 use rand::{Rng, RngExt};
 
-use crate::controller::{LargeStepTunable, RegionalTunable, ScaleTunable};
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
 use crate::target::{Point, SampleOf, Target};
+use crate::tunable::{LargeStepTunable, RegionalTunable, ScaleTunable};
 
 /// Metropolis-Hastings (Metropolis et al. 1953; Hastings 1970; DR paper eq. 3):
 /// propose `y ~ q(. | x)` and accept with `a = min(1, pi(y) q(y->x) / (pi(x) q(x->y)))`.

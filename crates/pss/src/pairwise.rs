@@ -22,13 +22,9 @@ pub const DRMLT2020_RADIUS_SCALE: f64 = 1.9;
 const RADIUS_TOLERANCE: f64 = 1e-9;
 
 /// The principal displacement `to - from` on the unit circle, in `[-1/2, 1/2]`: the minimal
-/// torus displacement between two coordinates in `[0, 1)`.
-#[inline]
-#[must_use]
-pub fn torus_displacement(from: f64, to: f64) -> f64 {
-    let d = to - from;
-    d - d.round()
-}
+/// torus displacement between two coordinates in `[0, 1)` (re-exported from
+/// [`mcmc_core::torus::displacement`], where it lives).
+pub use mcmc_core::torus::displacement as torus_displacement;
 
 /// Radius bounds of the pairwise polar Kelemen step: per pair of coordinates the displacement
 /// has a uniform direction and a length log-uniform on `[r_min, r_max]` (Kelemen's

@@ -4,10 +4,10 @@ use rand::{Rng, RngExt};
 
 use super::arithmetic::{NoGhost, StateArithmetic};
 use super::rule::{ln_accept_from_ratio, ln_one_minus, DrRule};
-use crate::controller::LargeStepTunable;
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, ConditionalProposal, Proposal, Proposed, MAX_COMPONENTS};
 use crate::target::{Point, Sample, SampleOf, Target};
+use crate::tunable::LargeStepTunable;
 use crate::McmcError;
 
 /// Two-stage delayed-rejection Metropolis-Hastings (Tierney & Mira 1999; Green & Mira 2001;

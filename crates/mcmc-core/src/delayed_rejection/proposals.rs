@@ -11,8 +11,7 @@ use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::proposal::{ConditionalProposal, Proposal, Proposed};
-use crate::torus::wrap;
-use crate::toy::wrapped_normal_pdf;
+use crate::torus::{wrap, wrapped_normal_pdf};
 use crate::McmcError;
 
 use super::wrapped_cauchy::WrappedCauchy;

@@ -9,12 +9,12 @@ use super::gaussian::ProposalGaussian;
 use super::kernel::{CurrentGradient, NoMove, LARGE_STEP_COMPONENT};
 use super::params::LangevinParams;
 use super::space::LangevinSpace;
-use crate::controller::LargeStepTunable;
 use crate::delayed_rejection::rule::{ln_accept_from_ratio, ln_one_minus};
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::mh::mh_decide;
 use crate::proposal::{log_sum_exp, Proposal};
 use crate::target::{DifferentiableTarget, Point, Sample, SampleOf};
+use crate::tunable::LargeStepTunable;
 use crate::McmcError;
 
 /// Two-stage delayed rejection whose first stage is *cheap* — an isotropic Gaussian random

@@ -7,11 +7,11 @@ use super::adaptation::Adaptation;
 use super::gaussian::ProposalGaussian;
 use super::params::LangevinParams;
 use super::space::LangevinSpace;
-use crate::controller::LargeStepTunable;
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::mh::mh_decide;
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
 use crate::target::{DifferentiableTarget, Point, SampleOf};
+use crate::tunable::LargeStepTunable;
 use crate::McmcError;
 
 /// A proposal that is never selected (the default large step and fallback of [`Langevin`]).

@@ -2,9 +2,8 @@
 
 use super::cache_view::PooledCache;
 use super::kernel::HasGradientCache;
-use crate::controller::Controller;
+use crate::controller::{Controller, SharedController};
 use crate::kernel::StepInfo;
-use crate::render_loop::SharedController;
 
 /// The controller that shares the gradient cache of cache-driven and hybrid MALA among all
 /// chains of a [`crate::render_loop::RenderLoop`]: at every round boundary each chain's new

@@ -7,11 +7,11 @@
 
 use rand::Rng;
 
-use crate::controller::LargeStepTunable;
 use crate::kernel::{mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
 use crate::render_loop::mis_step;
 use crate::target::{Sample, SampleOf, Target};
+use crate::tunable::LargeStepTunable;
 
 /// Wraps an asymmetric proposal and *claims* it is symmetric: `propose` reports a Hastings
 /// term of 0 and `is_symmetric` returns true, while `log_q` stays the true density.

@@ -2,12 +2,12 @@
 //!
 //! Public so that other crates (e.g. the render crate's BSDF sampling tests, pbrt style) can
 //! reuse it. The survival function is the regularised upper incomplete gamma
-//! `Q(k/2, x/2)` of [`crate::toy::special`], written from Numerical Recipes' series and
+//! `Q(k/2, x/2)` of [`crate::special`], written from Numerical Recipes' series and
 //! continued fraction (NR 3rd ed., section 6.2).
 
 use std::fmt;
 
-pub use crate::toy::special::{chi_square_cdf, chi_square_sf as survival};
+pub use crate::special::{chi_square_cdf, chi_square_sf as survival};
 
 /// The significance level of one stationarity test (DESIGN.md: alpha = 0.01).
 pub const ALPHA: f64 = 0.01;

@@ -2,8 +2,8 @@
 //! all chains through the render loop's round hook, and quadtree refinement (section 6.2) at
 //! those synchronisation points.
 
+use mcmc_core::controller::SharedController;
 use mcmc_core::controller::{AdaptState, RegionStats, ScaleAdaptParams};
-use mcmc_core::render_loop::SharedController;
 use mcmc_core::{Controller, Partition, StepInfo};
 
 use super::sigmas::{HasSharedSigmas, SharedSigmas};

@@ -1,10 +1,9 @@
 //! Statistics that the controllers of all chains share: merged in job order at every round
-//! boundary of the render loop and handed back, so shared adaptation is deterministic.
+//! boundary of a render loop and handed back, so shared adaptation is deterministic.
 
-use crate::controller::Controller;
-use crate::controller::{
-    AutoLargeStep, GlobalScale, LargeStepStats, LargeStepTunable, NoAdaptation, RegionalScale,
-};
+use super::{AutoLargeStep, Controller, GlobalScale, LargeStepStats, NoAdaptation, RegionalScale};
+use crate::kernel::StepInfo;
+use crate::tunable::LargeStepTunable;
 
 /// A controller whose statistics are pooled over all chains of a render loop.
 ///
@@ -78,7 +77,7 @@ impl<K: ?Sized, S, A: Controller<K, S>, B: Controller<K, S>> Controller<K, S> fo
         self.0.before_step(kernel, x);
         self.1.before_step(kernel, x);
     }
-    fn after_step(&mut self, kernel: &mut K, info: &crate::StepInfo) {
+    fn after_step(&mut self, kernel: &mut K, info: &StepInfo) {
         self.0.after_step(kernel, info);
         self.1.after_step(kernel, info);
     }
