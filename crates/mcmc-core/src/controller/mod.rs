@@ -3,6 +3,7 @@
 
 mod global_scale;
 mod large_step;
+mod regional_pool;
 mod regional_scale;
 mod shared;
 
@@ -11,11 +12,14 @@ pub use large_step::{
     automatic_large_step_probability, AutoLargeStep, LargeStepEstimate, LargeStepStats,
     FLATNESS_THRESHOLD, NOT_FLAT_LARGE_STEP_PROBABILITY,
 };
-pub use regional_scale::{RegionStats, RegionalScale, RegionalScaleParams};
+pub use regional_pool::PooledRegionalScales;
+pub use regional_scale::{RegionStats, RegionalScale, RegionalScaleParams, MAX_VISITS_PER_ROUND};
 pub use shared::{Both, SharedController};
 
 /// The tunable interfaces, re-exported from [`crate::tunable`] where they live.
-pub use crate::tunable::{LargeStepTunable, RegionalTunable, ScaleTunable};
+pub use crate::tunable::{
+    HasSharedScales, LargeStepTunable, RegionalTunable, ScaleTunable, SharedRegionalScales,
+};
 
 use crate::kernel::StepInfo;
 

@@ -1,7 +1,7 @@
 //! Statistics that the controllers of all chains share: merged in job order at every round
 //! boundary of a render loop and handed back, so shared adaptation is deterministic.
 
-use super::{AutoLargeStep, Controller, GlobalScale, LargeStepStats, NoAdaptation, RegionalScale};
+use super::{AutoLargeStep, Controller, GlobalScale, LargeStepStats, NoAdaptation};
 use crate::kernel::StepInfo;
 use crate::tunable::LargeStepTunable;
 
@@ -38,14 +38,6 @@ impl<K: ?Sized> SharedController<K> for NoAdaptation {
 
 /// Global scale adaptation is per chain (each chain follows its own sign rule).
 impl<K: ?Sized> SharedController<K> for GlobalScale {
-    type Shared = ();
-    fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}
-    fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
-}
-
-/// `RegionalScale` adapts per chain; `pathspace::regional::SharedRegionalAdaptation` is the
-/// regional controller whose statistics are shared through this hook.
-impl<K: ?Sized> SharedController<K> for RegionalScale {
     type Shared = ();
     fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}
     fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
