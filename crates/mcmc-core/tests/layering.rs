@@ -259,7 +259,7 @@ fn root_items(lib_rs: &str) -> BTreeMap<String, String> {
             continue; // `pub use rand;`: an external crate.
         }
         let tail = &path[module.len()..];
-        for name in tail.split(|c: char| c == ',' || c == '{' || c == '}' || c == ':') {
+        for name in tail.split([',', '{', '}', ':']) {
             let name = name.trim();
             let name = name.rsplit(" as ").next().unwrap_or(name).trim();
             if !name.is_empty() && name.chars().all(is_ident) {
