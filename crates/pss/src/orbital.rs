@@ -3,7 +3,7 @@
 //!
 //! The maths (the orbit of each pair, odd dimensions, the torus, the density of the singular
 //! second stage) is mcmc-core's [`mcmc_core::delayed_rejection::OrbitalWalk`] on the torus;
-//! see its module docs for the scheme. This file keeps what is specific to primary sample
+//! see its documentation for the scheme. This file keeps what is specific to primary sample
 //! space: which coordinates pair up, and the stage's PSS name and parameters.
 //!
 //! # The scheme

@@ -1,58 +1,5 @@
 //! The pairwise orbital second stage of delayed rejection (DR paper, section 4.4, Alg. 2
 //! stage 2): each coordinate pair of `z` on the circle centred at the rejected `y` through `x`.
-//!
-//! # The scheme
-//!
-//! Delayed rejection proposes `y` from the current state `x`; if `y` is rejected it proposes
-//! `z` from `q2(z | x, y)`. The pairwise orbital scheme makes the second-stage acceptance the
-//! closed form of eq. 11, `a2 = min(1, max(0, pi(z) - pi(y)) / (pi(x) - pi(y)))`, with two
-//! pieces: a first stage whose density is a product over coordinate pairs of functions of
-//! `|y_pair - x_pair|` only ([`super::RadialKelemen`]), and this second stage, which puts each
-//! pair of `z` on the circle centred at `y_pair` through `x_pair` (the *orbit*), at angle
-//! `theta` from `x_pair` seen from `y_pair`, `theta` drawn from a [`WrappedCauchy`] law
-//! (eq. 10). Then `q1(y | z) = q1(y | x)` (same distance per pair) and `q2(x | z, y) =
-//! q2(z | x, y)` (the reverse move needs angle `-theta`, and the law is symmetric), so the
-//! Tierney-Mira ratio (eq. 6) reduces to eq. 11.
-//!
-//! # Odd dimensions
-//!
-//! A lone coordinate ([`Group::Single`]) stays at `x`'s value (its 1-D "orbit" `{x, 2y - x}`
-//! taken at `x`): `|y_i - z_i| = |y_i - x_i|`, and "stay" is its own reverse, so eq. 11 stays
-//! exact. (The authors' code instead rounds every dimension up to even.)
-//!
-//! # The torus
-//!
-//! On the unit torus ([`OrbitalWalk::on_torus`]) coordinates wrap mod 1 (the authors' code
-//! reflects at the borders instead, which does not preserve distances) and all geometry uses
-//! the *minimal* displacement ([`crate::torus::displacement`]): the orbit is centred at `y`
-//! with radius `r = |min displacement(y -> x)|`, and `z = wrap(y + R(theta) (x - y))`. With
-//! `r < 1/2` every component of the rotated vector is below 1/2, so the minimal displacement
-//! `y -> z` is that vector: `z` is at torus distance `r` from `y`, and the reverse move `z ->
-//! x` sees the same circle. A first stage on the torus never proposes `r >= 1/2`; for such a
-//! pair the orbital stage reports [`Proposed::Invalid`] (no second stage, a valid choice
-//! because it is symmetric: a state on an orbit of radius `< 1/2` has only such orbit-mates).
-//!
-//! # Density of the singular second stage
-//!
-//! `z` is confined to the product of the orbits, a set of Lebesgue measure zero, so `q2` has no
-//! density. [`OrbitalWalk::groups_log_q`] is the density with respect to the product, over
-//! pairs, of the angle measure `d theta` on the orbit circle (and the counting measure for the
-//! coordinates it keeps): `sum over pairs of log p_WC(theta_pair)`, and `NEG_INFINITY` if `z`
-//! is off the orbit of `(x, y)` (to [`ORBIT_TOLERANCE`] relative). The forward move `x -> z`
-//! and the reverse `z -> x` (same `y`) live on the same set with the same reference measure,
-//! so the ratio a kernel forms from these values is the exact Radon-Nikodym ratio; it is
-//! always 1 for pairs that `propose` can produce, which is why eq. 11 has no `q2` term. (Arc
-//! length `r d theta` would do as well: the factor `r` is the same in both directions.) The
-//! same values serve a Green-Mira kernel: the fictional `y* = z - (y - x)` sees `x` on the
-//! orbit of `(z, y*)` at the same angle, so its `q2` ratio is 1 too.
-//!
-//! # Fixed dimension
-//!
-//! The orbit needs `x` and `y` at every coordinate `z` reads, so the stage works on states of
-//! a fixed layout: `Vec<f64>` points grouped by [`pairs`], or any state whose coordinates a
-//! caller reads through the per-pair [`OrbitalWalk::orbit_pair`] and
-//! [`OrbitalWalk::groups_log_q`] (`pss` does so for lazily grown primary-sample-space
-//! states materialised on a fixed layout).
 
 use std::f64::consts::PI;
 
@@ -71,11 +18,62 @@ pub const ORBIT_TOLERANCE: f64 = 1e-9;
 /// The pairwise orbital second stage (DR paper, section 4.4, Alg. 2 stage 2): per coordinate
 /// pair, `z = y + R(theta) (x - y)`, the rotation by an angle `theta` drawn from a
 /// [`WrappedCauchy`] law (eq. 10); lone coordinates stay at `x`. In `R^n`
-/// ([`OrbitalWalk::new`]) or on the unit torus ([`OrbitalWalk::on_torus`]).
-///
-/// See the [module docs](self) for odd dimensions, the torus and the density `log_q` returns.
-/// After [`super::RadialKelemen`] as the first stage, a delayed-rejection kernel may use the
+/// ([`OrbitalWalk::new`]) or on the unit torus ([`OrbitalWalk::on_torus`]). After
+/// [`super::RadialKelemen`] as the first stage, a delayed-rejection kernel may use the
 /// closed-form acceptance of eq. 11 ([`super::DrRule::Orbital`]), exactly.
+///
+/// # The scheme
+///
+/// Delayed rejection proposes `y` from the current state `x`; if `y` is rejected it proposes
+/// `z` from `q2(z | x, y)`. The pairwise orbital scheme makes the second-stage acceptance the
+/// closed form of eq. 11, `a2 = min(1, max(0, pi(z) - pi(y)) / (pi(x) - pi(y)))`, with two
+/// pieces: a first stage whose density is a product over coordinate pairs of functions of
+/// `|y_pair - x_pair|` only ([`super::RadialKelemen`]), and this second stage, which puts each
+/// pair of `z` on the circle centred at `y_pair` through `x_pair` (the *orbit*), at angle
+/// `theta` from `x_pair` seen from `y_pair`, `theta` drawn from a [`WrappedCauchy`] law
+/// (eq. 10). Then `q1(y | z) = q1(y | x)` (same distance per pair) and `q2(x | z, y) =
+/// q2(z | x, y)` (the reverse move needs angle `-theta`, and the law is symmetric), so the
+/// Tierney-Mira ratio (eq. 6) reduces to eq. 11.
+///
+/// # Odd dimensions
+///
+/// A lone coordinate ([`Group::Single`]) stays at `x`'s value (its 1-D "orbit" `{x, 2y - x}`
+/// taken at `x`): `|y_i - z_i| = |y_i - x_i|`, and "stay" is its own reverse, so eq. 11 stays
+/// exact. (The authors' code instead rounds every dimension up to even.)
+///
+/// # The torus
+///
+/// On the unit torus ([`OrbitalWalk::on_torus`]) coordinates wrap mod 1 (the authors' code
+/// reflects at the borders instead, which does not preserve distances) and all geometry uses
+/// the *minimal* displacement ([`crate::torus::displacement`]): the orbit is centred at `y`
+/// with radius `r = |min displacement(y -> x)|`, and `z = wrap(y + R(theta) (x - y))`. With
+/// `r < 1/2` every component of the rotated vector is below 1/2, so the minimal displacement
+/// `y -> z` is that vector: `z` is at torus distance `r` from `y`, and the reverse move `z ->
+/// x` sees the same circle. A first stage on the torus never proposes `r >= 1/2`; for such a
+/// pair the orbital stage reports [`Proposed::Invalid`] (no second stage, a valid choice
+/// because it is symmetric: a state on an orbit of radius `< 1/2` has only such orbit-mates).
+///
+/// # Density of the singular second stage
+///
+/// `z` is confined to the product of the orbits, a set of Lebesgue measure zero, so `q2` has no
+/// density. [`OrbitalWalk::groups_log_q`] is the density with respect to the product, over
+/// pairs, of the angle measure `d theta` on the orbit circle (and the counting measure for the
+/// coordinates it keeps): `sum over pairs of log p_WC(theta_pair)`, and `NEG_INFINITY` if `z`
+/// is off the orbit of `(x, y)` (to [`ORBIT_TOLERANCE`] relative). The forward move `x -> z`
+/// and the reverse `z -> x` (same `y`) live on the same set with the same reference measure,
+/// so the ratio a kernel forms from these values is the exact Radon-Nikodym ratio; it is
+/// always 1 for pairs that `propose` can produce, which is why eq. 11 has no `q2` term. (Arc
+/// length `r d theta` would do as well: the factor `r` is the same in both directions.) The
+/// same values serve a Green-Mira kernel: the fictional `y* = z - (y - x)` sees `x` on the
+/// orbit of `(z, y*)` at the same angle, so its `q2` ratio is 1 too.
+///
+/// # Fixed dimension
+///
+/// The orbit needs `x` and `y` at every coordinate `z` reads, so the stage works on states of
+/// a fixed layout: `Vec<f64>` points grouped by [`pairs`], or any state whose coordinates a
+/// caller reads through the per-pair [`OrbitalWalk::orbit_pair`] and
+/// [`OrbitalWalk::groups_log_q`] (`pss` does so for lazily grown primary-sample-space
+/// states materialised on a fixed layout).
 ///
 /// Random numbers: one uniform per pair, in order (including pairs with `x = y`).
 ///
@@ -162,7 +160,7 @@ impl OrbitalWalk {
     }
 
     /// `log q2(z | x, y)` over the coordinates of `groups`, read through `read_x`, `read_y`,
-    /// `read_z` (see the module docs for the reference measure): the sum of the wrapped Cauchy
+    /// `read_z` (see the type docs for the reference measure): the sum of the wrapped Cauchy
     /// log densities of the pairs' angles, `NEG_INFINITY` if `z` is off the orbit (or, on the
     /// torus, the orbit's radius is `>= 1/2`) or a lone coordinate of `z` differs from `x`.
     pub fn groups_log_q(
@@ -230,7 +228,7 @@ impl ConditionalProposal<Vec<f64>> for OrbitalWalk {
     }
 
     /// The density of `z` on the orbit of `(x, y)` w.r.t. the product of the orbits' angle
-    /// measures (module docs); `NEG_INFINITY` off the orbit or for mismatched lengths.
+    /// measures (type docs); `NEG_INFINITY` off the orbit or for mismatched lengths.
     fn log_q(&self, x: &Vec<f64>, y: &Vec<f64>, z: &Vec<f64>) -> f64 {
         if y.len() != x.len() || z.len() != x.len() {
             return f64::NEG_INFINITY;

@@ -8,8 +8,7 @@ use super::full_online::FullOnline;
 use super::gaussian::ProposalGaussian;
 use super::params::LangevinParams;
 
-/// The adaptation of MALA with adaptation (Alg. 1-4 of
-/// ../shared/papers/langevin-mcmc-rendering.txt): a parameter `theta` (the accumulated
+/// The adaptation of MALA with adaptation (Luan et al. 2020, Alg. 1-4): a parameter `theta` (the accumulated
 /// gradient statistics, or the gradient cache) and the rule that forms the proposal
 /// Gaussian at a point `u` from `theta` and the truncated gradient `g(u)`.
 ///

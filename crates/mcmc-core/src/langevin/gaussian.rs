@@ -10,8 +10,8 @@ use super::params::LangevinParams;
 const LN_SQRT_2PI: f64 = 0.918_938_533_204_672_7;
 
 /// The proposal Gaussian of one MALA step, as an *offset* from the point it is formed at:
-/// `offset ~ N(mu, Sigma)` with `Sigma = epsilon M` and `mu = Sigma m / 2` (eq. 8-9, 18, 28 of
-/// ../shared/papers/langevin-mcmc-rendering.txt). Diagonal `Sigma` (the paper's algorithms)
+/// `offset ~ N(mu, Sigma)` with `Sigma = epsilon M` and `mu = Sigma m / 2` (Luan et al. 2020,
+/// eq. 8-9, 18, 28). Diagonal `Sigma` (the paper's algorithms)
 /// or full `Sigma` (its Fig. 2 comparison, section 5; feature `nalgebra`), stored with its
 /// Cholesky factor.
 ///

@@ -95,8 +95,8 @@ impl CurrentGradient {
     }
 }
 
-/// The Metropolis-adjusted Langevin algorithm with adaptation (Luan et al. 2020,
-/// ../shared/papers/langevin-mcmc-rendering.txt, Alg. 1): with probability `p_large` a large
+/// The Metropolis-adjusted Langevin algorithm with adaptation (Luan et al. 2020, Alg. 1):
+/// with probability `p_large` a large
 /// step (any [`Proposal`], e.g. an independent uniform sample), with probability
 /// `p_fallback` a plain fallback step (any proposal, e.g. an isotropic Gaussian that escapes
 /// states where the gradient misleads), otherwise a MALA step from the [`Adaptation`]'s

@@ -1,6 +1,6 @@
 //! Langevin Monte Carlo: the Metropolis-adjusted Langevin algorithm (MALA) with online,
-//! cache-driven and hybrid adaptation (Luan et al. 2020,
-//! ../shared/papers/langevin-mcmc-rendering.txt, sections 4-7, Alg. 1-4), and the
+//! cache-driven and hybrid adaptation (Luan et al. 2020, "Langevin Monte Carlo Rendering with
+//! Gradient-based Adaptation", sections 4-7, Alg. 1-4), and the
 //! "cheap-then-expensive" delayed-rejection kernel with a MALA second stage (DR paper,
 //! section 5.2).
 //!

@@ -1,7 +1,8 @@
 //! Negative controls: deliberately broken proposals and kernels that the harness must reject.
 //!
 //! A correctness test that cannot fail proves nothing. Each control here reproduces a bug
-//! seen in real MLT code (DESIGN.md, "Negative controls"); tests show the harness catches it
+//! seen in real MLT code (docs/architecture.md, "Using the correctness harness from another
+//! crate"); tests show the harness catches it
 //! on the same target and proposal where the correct kernel passes. Other crates reuse them to
 //! show their own tests have teeth.
 
@@ -111,8 +112,8 @@ impl<T: Target, P: Proposal<T::State>> Kernel<T> for MhWithoutHastings<P> {
 
 /// Forces acceptance of the candidate after `max_rejections` consecutive rejections, as
 /// LuxRender's and Corona's Metropolis samplers do ("maxconsecrejects") to escape sticky
-/// states. It breaks detailed balance (DESIGN.md: "No forced acceptance after many
-/// rejections"), which the stationarity test exposes.
+/// states. It breaks detailed balance (the chain is no longer a Markov chain on the state
+/// alone, and its stationary law is not `pi`), which the stationarity test exposes.
 ///
 /// The wrapped kernel runs normally; if it rejected and the previous `max_rejections` steps
 /// were all rejections, the last candidate it evaluated (left in

@@ -1,7 +1,8 @@
 //! Toy targets with exact normalised densities, exact samplers and exact bin probabilities.
 //!
 //! They are the test bench of every kernel: small, cheap, and known in closed form, so a
-//! chain's output can be compared with the truth (DESIGN.md, "Tests that prove the maths").
+//! chain's output can be compared with the truth (docs/architecture.md, "Using the
+//! correctness harness from another crate").
 //! All live on `Vec<f64>` states with no payload.
 //!
 //! | target | dim | what it stresses |

@@ -19,9 +19,10 @@ pub(super) fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
 pub struct Neighbour {
     /// Squared Euclidean distance from the query point.
     pub dist2: f64,
-    /// The `source` tag passed to [`GradientCache::query`].
+    /// The `source` tag passed to [`super::GradientCache::query`].
     pub source: u32,
-    /// Index of the entry in its cache ([`GradientCache::point`], [`GradientCache::gradient`]).
+    /// Index of the entry in its cache ([`super::GradientCache::point`],
+    /// [`super::GradientCache::gradient`]).
     pub index: usize,
 }
 
