@@ -2,10 +2,10 @@
 
 use rand::{Rng, RngExt};
 
-use crate::controller::{LargeStepTunable, RegionalTunable, ScaleTunable};
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
 use crate::target::{Point, SampleOf, Target};
+use crate::tunable::{HasSharedScales, LargeStepTunable, RegionalTunable, ScaleTunable};
 
 /// Metropolis-Hastings (Metropolis et al. 1953; Hastings 1970; DR paper eq. 3):
 /// propose `y ~ q(. | x)` and accept with `a = min(1, pi(y) q(y->x) / (pi(x) q(x->y)))`.
@@ -160,5 +160,15 @@ impl<P: LargeStepTunable> LargeStepTunable for Mh<P> {
     }
     fn is_large_step(&self, component: usize) -> bool {
         self.proposal.is_large_step(component)
+    }
+}
+
+impl<P: HasSharedScales> HasSharedScales for Mh<P> {
+    type Scales = P::Scales;
+    fn shared_scales(&self) -> Option<&P::Scales> {
+        self.proposal.shared_scales()
+    }
+    fn shared_scales_mut(&mut self) -> Option<&mut P::Scales> {
+        self.proposal.shared_scales_mut()
     }
 }

@@ -2,15 +2,17 @@
 //! target invariant.
 //!
 //! - `GlobalScale` (regional-adaptive paper, Alg. 1 with one region, eq. 4-6) drives MH's
-//!   acceptance on a 10-D correlated Gaussian to within 0.05 of 0.5 (the tolerance).
+//!   acceptance on a 10-D correlated Gaussian to within 0.05 of 0.5.
 //!   After freezing, the sign rule's last step `gamma_n = 5 / sqrt(5000) = 0.07` moves `log
 //!   sigma^2` by 0.07, i.e. sigma by 3.5%, which shifts the acceptance by about 0.02 at most;
 //!   the acceptance measured over the 200 000-step window has a standard error below 0.005.
-//! - `RegionalScale` (section 4) on the DR paper's mixture of uniforms, with one region for the
-//!   spike and one for the plateau, brings each region's acceptance to within 0.05 of 0.5
-//!   (same argument as above; about 10 000 sign-rule updates per region) and ends with a
-//!   smaller scale in the spike than on the plateau (the scales solving acceptance = 0.5
-//!   differ by about a factor 10).
+//! - `RegionalScale` (sections 4 and 7; the shared controller the path-space renderer runs) on
+//!   the DR paper's mixture of uniforms, with one region for the spike and one for the plateau,
+//!   synchronised every 100 mutations, brings each region's acceptance to within 0.05 of 0.5
+//!   (one sign-rule update per region and round, about 5000 per region, so the last step
+//!   `gamma_n = 5 / sqrt(5000) = 0.07` moves sigma by 3.5%) and ends with a smaller scale in the
+//!   spike than on the plateau (the scales solving acceptance = 0.5 differ by about a factor
+//!   10).
 //! - `AutoLargeStep` (automatic-large-step paper, section 2) sets `p_l` to
 //!   `automatic_large_step_probability` of the statistics it measured, which we re-measure
 //!   independently with an observer; `eta_0` and `eta_l` match their exact values within 4.5
@@ -19,13 +21,16 @@
 //! The stationarity tests of the frozen kernels ([`STATIONARITY_TESTS`] in this file) pass at
 //! the Sidak level for alpha = 0.01.
 
+use std::sync::Arc;
+
 use mcmc_core::controller::{
-    automatic_large_step_probability, AutoLargeStep, GlobalScale, LargeStepTunable, RegionalScale,
-    RegionalScaleParams, RegionalTunable, ScaleAdaptParams, ScaleTunable,
+    automatic_large_step_probability, AutoLargeStep, GlobalScale, HasSharedScales,
+    LargeStepTunable, PooledRegionalScales, RegionalScale, RegionalScaleParams, ScaleAdaptParams,
+    ScaleTunable, SharedController, SharedRegionalScales,
 };
 use mcmc_core::partition::Partition;
 use mcmc_core::partition::UniformGrid;
-use mcmc_core::proposal::{FixedSelection, Regional, Scaled};
+use mcmc_core::proposal::{FixedSelection, Scaled, ScaledProposal};
 use mcmc_core::stats::integrated_autocorrelation_time;
 use mcmc_core::testing::{toy_stationarity_test, StationarityParams};
 use mcmc_core::toy::{CorrelatedGaussian, PiecewiseConstant, ToyTarget, UniformMixture};
@@ -89,6 +94,79 @@ fn global_scale_reaches_target_acceptance_then_freezes() {
     report.assert_passes("frozen GlobalScale kernel", STATIONARITY_TESTS);
 }
 
+/// Per-region scales over a grid behind an `Arc`: the handle the shared regional controller
+/// reads regions from and publishes new scales through (copy-on-write).
+#[derive(Clone, Debug)]
+struct GridScales(Arc<(UniformGrid, Vec<f64>)>);
+
+impl SharedRegionalScales for GridScales {
+    type Partition = UniformGrid;
+    fn partition(&self) -> &UniformGrid {
+        &self.0 .0
+    }
+    fn num_regions(&self) -> usize {
+        self.0 .1.len()
+    }
+    fn log_scale_of(&self, region: usize) -> f64 {
+        self.0 .1[region]
+    }
+    fn set_log_scale_of(&mut self, region: usize, lambda: f64) {
+        Arc::make_mut(&mut self.0).1[region] = lambda;
+    }
+    fn split_region(&mut self, _region: usize) -> Option<std::ops::Range<usize>> {
+        None
+    }
+    fn same_as(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// The Gaussian walk at the scale of the current state's region, with the reverse density at
+/// the scale of the proposed state's region (regional-adaptive paper, eq. 2-3), reading its
+/// scales from a [`GridScales`] handle.
+#[derive(Clone, Debug)]
+struct SharedRegionalWalk {
+    walk: GaussianRandomWalk,
+    scales: GridScales,
+}
+
+impl SharedRegionalWalk {
+    fn lambda(&self, x: &Vec<f64>) -> f64 {
+        self.scales.log_scale_of(self.scales.partition().region(x))
+    }
+}
+
+impl Proposal<Vec<f64>> for SharedRegionalWalk {
+    fn propose<R: Rng + ?Sized>(&self, x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut R) -> Proposed {
+        let lx = self.lambda(x);
+        match self.walk.propose_at_scale(lx, x, y, rng) {
+            Proposed::Move { .. } => Proposed::Move {
+                log_hastings: self.walk.log_q_at_scale(self.lambda(y), y, x)
+                    - self.walk.log_q_at_scale(lx, x, y),
+                component: 0,
+            },
+            invalid => invalid,
+        }
+    }
+
+    fn log_q(&self, from: &Vec<f64>, to: &Vec<f64>) -> f64 {
+        self.walk.log_q_at_scale(self.lambda(from), from, to)
+    }
+}
+
+impl HasSharedScales for SharedRegionalWalk {
+    type Scales = GridScales;
+    fn shared_scales(&self) -> Option<&GridScales> {
+        Some(&self.scales)
+    }
+    fn shared_scales_mut(&mut self) -> Option<&mut GridScales> {
+        Some(&mut self.scales)
+    }
+}
+
+/// Mutations per round between synchronisation points.
+const ROUND: u64 = 100;
+
 #[test]
 fn regional_scale_reaches_target_per_region_and_shrinks_the_spike() {
     let target = UniformMixture::rioux_lavoie2020();
@@ -97,25 +175,42 @@ fn regional_scale_reaches_target_per_region_and_shrinks_the_spike() {
     let grid = UniformGrid::new(1, 2, -1.0, 1.0).unwrap();
     let params = RegionalScaleParams {
         split_after_visits: None,
+        perturbation_component: None,
         ..RegionalScaleParams::otsu2018()
     };
-    let mut kernel = Mh::new(Regional::new::<Vec<f64>>(
-        GaussianRandomWalk::new(1.0).unwrap(),
-        grid,
-        0.0,
-    ));
-    let controller =
-        RegionalScale::new(params, RegionalTunable::<Vec<f64>>::num_regions(&kernel)).unwrap();
-    controller.init::<Vec<f64>, _>(&mut kernel);
+    let scales = GridScales(Arc::new((grid, vec![params.adapt.lambda_initial; 2])));
+    let kernel = Mh::new(SharedRegionalWalk {
+        walk: GaussianRandomWalk::new(1.0).unwrap(),
+        scales,
+    });
+    let controller = RegionalScale::new(params).unwrap();
     let mut rng = Pcg64::seed_from_u64(202);
     let start = target.sample_exact(&mut rng);
     let mut chain = Chain::new(&target, kernel, controller, rng, start).unwrap();
-    chain.run(200_000, &mut ()).unwrap();
+    // One chain synchronised by hand every ROUND mutations (a render loop does this for many).
+    type K = Mh<SharedRegionalWalk>;
+    let mut pooled = PooledRegionalScales::default();
+    for _ in 0..ROUNDS {
+        chain.run(ROUND, &mut ()).unwrap();
+        let (kernel, controller) = chain.kernel_and_controller_mut();
+        controller.contribute(kernel, &mut pooled);
+        <RegionalScale as SharedController<K>>::end_round(&mut pooled);
+        controller.receive(kernel, &pooled);
+    }
+    assert_eq!(pooled.rounds(), ROUNDS);
+    assert_eq!(pooled.mutations(), ROUNDS * ROUND);
+    for k in 0..2 {
+        let updates = pooled.region_stats(k).unwrap().adapt.updates;
+        assert!(updates > ROUNDS / 2, "region {k}: {updates} updates");
+    }
 
     let kernel = chain.kernel().clone();
+    assert!(kernel.proposal.scales.same_as(pooled.sigmas().unwrap()));
     let sigmas: Vec<f64> = kernel
         .proposal
-        .lambdas()
+        .scales
+        .0
+         .1
         .iter()
         .map(|l| (0.5 * l).exp())
         .collect();
@@ -126,7 +221,7 @@ fn regional_scale_reaches_target_per_region_and_shrinks_the_spike() {
     let mut fixed = Chain::new(&target, kernel.clone(), NoAdaptation, rng, start).unwrap();
     let (mut sum, mut count) = ([0.0; 2], [0u64; 2]);
     for _ in 0..200_000 {
-        let k = kernel.proposal.partition.region(fixed.state());
+        let k = kernel.proposal.scales.partition().region(fixed.state());
         let info = fixed.step(&mut ()).unwrap();
         sum[k] += info.accept_prob[0];
         count[k] += 1;
@@ -154,6 +249,9 @@ fn regional_scale_reaches_target_per_region_and_shrinks_the_spike() {
     eprintln!("RegionalScale adapted kernel: {report}");
     report.assert_passes("adapted RegionalScale kernel", STATIONARITY_TESTS);
 }
+
+/// Synchronisation points of the regional test.
+const ROUNDS: u64 = 5000;
 
 /// Independent uniform "large step" on `[lo, hi)`: `q(x -> y) = 1 / (hi - lo)` on the box.
 #[derive(Clone, Debug)]

@@ -1,5 +1,5 @@
-//! Two-stage delayed rejection (issue 9) through the mcmc-core harness: each acceptance rule
-//! (Tierney-Mira, Green-Mira, orbital) passes the pairwise flow check, the exact finite-state
+//! Two-stage delayed rejection (DR paper, section 4) through the mcmc-core harness: each
+//! acceptance rule (Tierney-Mira, Green-Mira, orbital) passes the pairwise flow check, the exact finite-state
 //! check where it applies, chi-square stationarity from exact starts (including a lazily
 //! materialised state whose read set depends on the state, and mass across the torus seam) and
 //! the splat-weight check; each check has a negative control that fails it. Then the two

@@ -1,11 +1,12 @@
-//! The pairwise orbital mutation: the second stage of delayed-rejection MLT (paper section 4.4).
+//! The pairwise orbital mutation on primary sample space: the second stage of
+//! delayed-rejection MLT (DR paper, section 4.4, Alg. 2).
+//!
+//! The maths (the orbit of each pair, odd dimensions, the torus, the density of the singular
+//! second stage) is mcmc-core's [`mcmc_core::delayed_rejection::OrbitalWalk`] on the torus;
+//! see its documentation for the scheme. This file keeps what is specific to primary sample
+//! space: which coordinates pair up, and the stage's PSS name and parameters.
 //!
 //! # The scheme
-//!
-//! Delayed rejection (DR paper, ../shared/papers/delayed-rejection-mlt.txt, Alg. 1) proposes
-//! `y` from the current state `x`; if `y` is rejected it proposes `z` from `q2(z | x, y)`. The
-//! pairwise orbital scheme (section 4.4, Alg. 2) makes the second-stage acceptance the closed
-//! form of eq. 11, `a2 = min(1, max(0, pi(z) - pi(y)) / (pi(x) - pi(y)))`, with two pieces:
 //!
 //! - stage 1, [`crate::PairwiseKelemen`]: each pair of coordinates moves by
 //!   `r (cos phi, sin phi)`, `phi` uniform, `r` from Kelemen's law; its density is a product
@@ -14,9 +15,7 @@
 //!   `x_pair` (the *orbit*), at angle `theta` from `x_pair` seen from `y_pair`, `theta` drawn
 //!   from a wrapped Cauchy law (eq. 10, [`crate::WrappedCauchy`]).
 //!
-//! Then `q1(y | z) = q1(y | x)` (same distance per pair) and `q2(x | z, y) = q2(z | x, y)`
-//! (the reverse move needs angle `-theta`, and the law is symmetric), so the Tierney-Mira
-//! ratio (eq. 6) reduces to `pi(z) (1 - a1(z, y)) / (pi(x) (1 - a1(x, y)))`, which is eq. 11.
+//! Then the second-stage acceptance is the closed form of eq. 11.
 //!
 //! # Pairing
 //!
@@ -33,78 +32,37 @@
 //! two pairs, and bounce directions alternate between natural and split pairs. That stays
 //! exact (any partition into pairs and lone coordinates does) but is less natural; a
 //! renderer that wants every 2-D sample paired pads it to an even position with one unused
-//! number.
-//!
-//! # Odd dimensions
-//!
-//! A stream of odd dimension ends with a lone coordinate. Stage 1 moves it by Kelemen's 1-D
-//! step with the same radius law (random sign); stage 2 keeps it at `x`'s value. Both keep
-//! eq. 11 exact: `|y_i - z_i| = |y_i - x_i|`, and "stay" is its own reverse. (The authors'
-//! code instead rounds every dimension up to even, except for one sampler where an odd
-//! dimension indexes past the end.) Any other coordinate stage 2 does not move stays at
-//! `x`'s value, for the same reason.
-//!
-//! # The torus
-//!
-//! Coordinates live on the unit circle `[0, 1)` with wrap-around (mod 1; the authors' code
-//! reflects at the borders instead, which does not preserve distances). All geometry uses the
-//! *minimal* torus displacement ([`crate::torus_displacement`]): the orbit is centred at `y`
-//! with radius `r = |min displacement(y -> x)|`, and `z = wrap(y + r (cos, sin))`. With
-//! `r < 1/2` every component of `r (cos, sin)` is below 1/2, so the minimal displacement
-//! `y -> z` is that vector: `z` is at torus distance `r` from `y`, and the reverse move
-//! `z -> x` sees the same circle. Stage 1 never proposes `r >= 1/2` (its `r_max < 1/2`); for
-//! such a pair the orbital stage reports [`Proposed::Invalid`] (no second stage, which is a
-//! valid choice because it is symmetric: a state on an orbit of radius `< 1/2` has only such
-//! orbit-mates).
-//!
-//! # Density of the singular second stage
-//!
-//! `z` is confined to the product of the orbits, a set of Lebesgue measure zero, so `q2` has no
-//! density on `[0, 1)^n`. [`Orbital`]'s `log_q(x, y, z)` is the density with respect to the
-//! product, over pairs, of the angle measure `d theta` on the orbit circle (and the counting
-//! measure for the coordinates it keeps): `sum over pairs of log p_WC(theta_pair)`, and
-//! `NEG_INFINITY` if `z` is off the orbit of `(x, y)`. The forward move `x -> z` and the
-//! reverse `z -> x` (same `y`) live on the same set with the same reference measure, so the
-//! ratio a kernel forms from these values is the exact Radon-Nikodym ratio; it is always 1
-//! for pairs that `propose` can produce, which is why eq. 11 has no `q2` term. (Arc length
-//! `r d theta` would do as well: the factor `r` is the same in both directions.) The same
-//! values serve a Green-Mira kernel: the fictional `y* = z - (y - x)` sees `x` on the orbit
-//! of `(z, y*)` at the same angle, so its `q2` ratio is 1 too.
+//! number. A stream of odd dimension ends with a lone coordinate, which stage 1 moves by
+//! Kelemen's 1-D step and stage 2 keeps at `x`'s value.
 //!
 //! # Fixed dimension
 //!
 //! The orbit needs `x` and `y` at every coordinate `z` reads, so both stages work on states
 //! materialised to a fixed layout (as the authors' code does), never on lazily grown ones:
 //! `Vec<f64>` points of `[0, 1)^n`, whose length is the layout
-//! ([`PairLayout::single_stream`]), and [`crate::PssState`]s through [`crate::OnLayout`],
-//! which materialises a given [`PairLayout`] exactly (its docs say how the lazy state's
+//! ([`crate::PairLayout::single_stream`]), and [`crate::PssState`]s through
+//! [`crate::OnLayout`], which materialises a given [`crate::PairLayout`] exactly (its docs say how the lazy state's
 //! catch-up and `absorb_rejected` are kept). Both stages are symmetric only because the
 //! layout does not depend on the state: a layout that grew with what `x` has read would
 //! perturb coordinates in one direction that the reverse move leaves alone.
 
-use std::f64::consts::PI;
-
+use mcmc_core::delayed_rejection::{Group, OrbitalWalk, WrappedCauchy};
 use mcmc_core::proposal::ConditionalProposal;
 use mcmc_core::Proposed;
 use rand::Rng;
 
-use crate::mutation::wrap;
-use crate::pairwise::{torus_displacement, Group, PairLayout};
-use mcmc_core::delayed_rejection::WrappedCauchy;
-
-/// Relative tolerance of the on-orbit test of [`Orbital`]'s `log_q` (radii recomputed from
-/// wrapped coordinates differ from the drawn one by rounding).
-const ORBIT_TOLERANCE: f64 = 1e-9;
-
-/// The pairwise orbital second stage (DR paper section 4.4, Alg. 2, stage 2): per pair,
-/// `z = y + R(theta) (x - y)` on the torus, the rotation by an angle `theta` drawn from the
-/// wrapped Cauchy law (eq. 10); lone coordinates stay at `x`.
+/// The pairwise orbital second stage (DR paper section 4.4, Alg. 2, stage 2) on the unit
+/// torus: per pair, `z = y + R(theta) (x - y)` with minimal torus displacements, wrapped, the
+/// rotation by an angle `theta` drawn from the wrapped Cauchy law (eq. 10); lone coordinates
+/// stay at `x`. It is mcmc-core's [`OrbitalWalk::torus_with`]`(angle)`.
 ///
-/// See the [module docs](self) for the pairing, odd dimensions, the torus, and the density
-/// `log_q` returns. With [`crate::PairwiseKelemen`] as the first stage, a delayed-rejection
-/// kernel may use the closed-form acceptance of eq. 11, exactly.
+/// See the [module docs](self) for the pairing and mcmc-core's [`OrbitalWalk`] for odd
+/// dimensions, the torus, and the density `log_q` returns. With [`crate::PairwiseKelemen`] as
+/// the first stage, a delayed-rejection kernel may use the closed-form acceptance of eq. 11,
+/// exactly.
 ///
-/// States: `Vec<f64>`, a point of `[0, 1)^n`, paired as [`PairLayout::single_stream`]`(n)`.
+/// States: `Vec<f64>`, a point of `[0, 1)^n`, paired as [`crate::PairLayout::single_stream`]`(n)`;
+/// [`crate::PssState`]s through [`crate::OnLayout`].
 /// Random numbers: one uniform per pair, in order (including pairs with `x = y`).
 ///
 /// # Example
@@ -141,9 +99,16 @@ impl Orbital {
         Self { angle }
     }
 
-    /// The pair of `z` on the orbit of the pairs `x`, `y`: `y + R(theta) (x - y)` with minimal
-    /// torus displacements, wrapped; `None` if the orbit's radius is `>= 1/2`. One uniform
-    /// (drawn in both cases).
+    /// The stage as mcmc-core's torus [`OrbitalWalk`], which implements it.
+    #[inline]
+    #[must_use]
+    pub const fn walk(&self) -> OrbitalWalk {
+        OrbitalWalk::torus_with(self.angle)
+    }
+
+    /// The pair of `z` on the orbit of the pairs `x`, `y` ([`OrbitalWalk::orbit_pair`] on the
+    /// torus): `y + R(theta) (x - y)` with minimal torus displacements, wrapped; `None` if the
+    /// orbit's radius is `>= 1/2`. One uniform (drawn in both cases).
     #[inline]
     pub fn orbit_pair<R: Rng + ?Sized>(
         &self,
@@ -151,21 +116,11 @@ impl Orbital {
         y: [f64; 2],
         rng: &mut R,
     ) -> Option<[f64; 2]> {
-        let dx = torus_displacement(y[0], x[0]);
-        let dy = torus_displacement(y[1], x[1]);
-        let theta = self.angle.sample(rng);
-        if dx.hypot(dy) >= 0.5 {
-            return None;
-        }
-        let (sin, cos) = theta.sin_cos();
-        Some([
-            wrap(y[0] + cos * dx - sin * dy),
-            wrap(y[1] + sin * dx + cos * dy),
-        ])
+        self.walk().orbit_pair(x, y, rng)
     }
 
-    /// `log q2(z | x, y)` over the coordinates of `groups` (see the module docs for the
-    /// reference measure): the sum of the wrapped Cauchy log densities of the pairs' angles,
+    /// `log q2(z | x, y)` over the coordinates of `groups` ([`OrbitalWalk::groups_log_q`] on
+    /// the torus): the sum of the wrapped Cauchy log densities of the pairs' angles,
     /// `NEG_INFINITY` if `z` is off the orbit.
     pub fn groups_log_q(
         &self,
@@ -174,36 +129,7 @@ impl Orbital {
         read_y: impl Fn(usize) -> f64,
         read_z: impl Fn(usize) -> f64,
     ) -> f64 {
-        let mut log_q = 0.0;
-        for group in groups {
-            match group {
-                Group::Pair(a, b) => {
-                    let (ya, yb) = (read_y(a), read_y(b));
-                    let (ux, uy) = (
-                        torus_displacement(ya, read_x(a)),
-                        torus_displacement(yb, read_x(b)),
-                    );
-                    let (vx, vy) = (
-                        torus_displacement(ya, read_z(a)),
-                        torus_displacement(yb, read_z(b)),
-                    );
-                    let (r, s) = (ux.hypot(uy), vx.hypot(vy));
-                    if r >= 0.5 || (r - s).abs() > ORBIT_TOLERANCE * r.max(f64::MIN_POSITIVE) {
-                        return f64::NEG_INFINITY;
-                    }
-                    if r > 0.0 {
-                        let theta = (ux * vy - uy * vx).atan2(ux * vx + uy * vy);
-                        log_q += self.angle.log_pdf(theta.clamp(-PI, PI));
-                    }
-                }
-                Group::Single(a) => {
-                    if read_z(a) != read_x(a) {
-                        return f64::NEG_INFINITY;
-                    }
-                }
-            }
-        }
-        log_q
+        self.walk().groups_log_q(groups, read_x, read_y, read_z)
     }
 }
 
@@ -217,39 +143,24 @@ impl ConditionalProposal<Vec<f64>> for Orbital {
         z: &mut Vec<f64>,
         rng: &mut R,
     ) -> Proposed {
-        z.clone_from(x);
-        if y.len() != x.len() {
-            return Proposed::Invalid { component: 0 };
-        }
-        for group in PairLayout::single_stream(x.len()).groups(1) {
-            // Lone coordinates stay at x (z is a copy of x).
-            if let Group::Pair(a, b) = group {
-                match self.orbit_pair([x[a], x[b]], [y[a], y[b]], rng) {
-                    Some(pair) => [z[a], z[b]] = pair,
-                    None => return Proposed::Invalid { component: 0 },
-                }
-            }
-        }
-        Proposed::symmetric()
+        self.walk().propose(x, y, z, rng)
     }
 
     /// The density of `z` on the orbit of `(x, y)` w.r.t. the product of the orbits' angle
-    /// measures (module docs); `NEG_INFINITY` off the orbit or for mismatched lengths.
+    /// measures; `NEG_INFINITY` off the orbit or for mismatched lengths.
     fn log_q(&self, x: &Vec<f64>, y: &Vec<f64>, z: &Vec<f64>) -> f64 {
-        if y.len() != x.len() || z.len() != x.len() {
-            return f64::NEG_INFINITY;
-        }
-        let layout = PairLayout::single_stream(x.len());
-        self.groups_log_q(layout.groups(1), |i| x[i], |i| y[i], |i| z[i])
+        self.walk().log_q(x, y, z)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pairwise::PairwiseKelemen;
+    use crate::mutation::wrap;
+    use crate::pairwise::{torus_displacement, PairwiseKelemen};
     use mcmc_core::Proposal;
     use rand::{RngExt, SeedableRng};
+    use std::f64::consts::PI;
 
     #[test]
     fn z_lies_on_the_orbit_and_the_reverse_move_has_the_same_density() {

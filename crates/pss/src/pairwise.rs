@@ -1,34 +1,27 @@
-//! The pairwise polar Kelemen step: the first stage of delayed-rejection MLT's orbital scheme.
+//! The pairwise polar Kelemen step on primary sample space (the first stage of
+//! delayed-rejection MLT's orbital scheme) and the layout of coordinate pairs over streams.
 //!
-//! See the [`crate::orbital`] module docs for the whole scheme (pairing, odd dimensions, the
-//! torus, laziness).
+//! The maths of the step is mcmc-core's [`mcmc_core::delayed_rejection::RadialKelemen`] on the
+//! torus; this file keeps its PSS parameters and presets and how stream coordinates pair up
+//! ([`PairLayout`]). See the [`crate::orbital`] module docs for the whole scheme.
 
-use std::f64::consts::{LN_2, TAU};
-
+use mcmc_core::delayed_rejection::RadialKelemen;
 use mcmc_core::{Proposal, Proposed};
-use rand::{Rng, RngExt};
+use rand::Rng;
 
-use crate::mutation::{wrap, KelemenParams};
+use crate::mutation::KelemenParams;
 use crate::state::MAX_STREAMS;
 use crate::PssError;
 
 /// The radius scale the DRMLT authors' code applies to Kelemen's bounds for its pairwise first
-/// stage ("compensate pairwise vs i.i.d."; ../shared/notes/reference-implementations.md,
-/// section 2). The paper's Alg. 2 does not mention it.
+/// stage ("compensate pairwise vs i.i.d."; docs/methods/drmlt.md). The paper's Alg. 2 does not
+/// mention it.
 pub const DRMLT2020_RADIUS_SCALE: f64 = 1.9;
 
-/// Relative tolerance on radii recomputed from wrapped coordinates (a radius drawn as exactly
-/// `r_max` may come back as `r_max (1 + 1e-15)`).
-const RADIUS_TOLERANCE: f64 = 1e-9;
-
 /// The principal displacement `to - from` on the unit circle, in `[-1/2, 1/2]`: the minimal
-/// torus displacement between two coordinates in `[0, 1)`.
-#[inline]
-#[must_use]
-pub fn torus_displacement(from: f64, to: f64) -> f64 {
-    let d = to - from;
-    d - d.round()
-}
+/// torus displacement between two coordinates in `[0, 1)` (re-exported from
+/// [`mcmc_core::torus::displacement`], where it lives).
+pub use mcmc_core::torus::displacement as torus_displacement;
 
 /// Radius bounds of the pairwise polar Kelemen step: per pair of coordinates the displacement
 /// has a uniform direction and a length log-uniform on `[r_min, r_max]` (Kelemen's
@@ -92,62 +85,51 @@ impl PairwiseKelemenParams {
         }
     }
 
-    /// `ln(r_max / r_min)`.
+    /// The radius law as mcmc-core's torus [`RadialKelemen`], which implements it.
     #[inline]
-    fn log_ratio(&self) -> f64 {
-        (self.r_max / self.r_min).ln()
+    #[must_use]
+    pub const fn stage(&self) -> RadialKelemen {
+        RadialKelemen::torus_unchecked(self.r_min, self.r_max)
     }
 
     /// The radius for a uniform `u` in `[0, 1)`: `r_max exp(-u ln(r_max / r_min))` (eq. 9).
     #[inline]
     #[must_use]
     pub fn radius(&self, u: f64) -> f64 {
-        self.r_max * (-u * self.log_ratio()).exp()
+        self.stage().radius(u)
     }
 
     /// `P(R <= r)` of the radius: `ln(r / r_min) / ln(r_max / r_min)` on `[r_min, r_max]`.
     #[must_use]
     pub fn radius_cdf(&self, r: f64) -> f64 {
-        ((r / self.r_min).ln() / self.log_ratio()).clamp(0.0, 1.0)
+        self.stage().radius_cdf(r)
     }
 
     /// Log density of the radius: `-ln(r ln(r_max / r_min))` on `[r_min, r_max]`.
     #[must_use]
     pub fn radius_log_pdf(&self, r: f64) -> f64 {
-        if self.in_support(r) {
-            -(r * self.log_ratio()).ln()
-        } else {
-            f64::NEG_INFINITY
-        }
+        self.stage().radius_log_pdf(r)
     }
 
+    /// True if `r` is a radius of the law (to a relative `1e-9` of the bounds).
     #[inline]
-    fn in_support(&self, r: f64) -> bool {
-        r >= self.r_min * (1.0 - RADIUS_TOLERANCE) && r <= self.r_max * (1.0 + RADIUS_TOLERANCE)
+    #[must_use]
+    pub fn in_support(&self, r: f64) -> bool {
+        self.stage().in_support(r)
     }
 
     /// Log density (w.r.t. area) of the pair displacement `(dx, dy)` (minimal torus
     /// displacements): `-ln(2 pi r^2 ln(r_max / r_min))` for `r = |(dx, dy)|` in the annulus.
     #[must_use]
     pub fn pair_log_density(&self, dx: f64, dy: f64) -> f64 {
-        let r = dx.hypot(dy);
-        if self.in_support(r) {
-            -(TAU * r * r * self.log_ratio()).ln()
-        } else {
-            f64::NEG_INFINITY
-        }
+        self.stage().pair_log_density(dx, dy)
     }
 
     /// Log density of the 1-D step of a lone coordinate (a radius with a random sign):
     /// `-ln(2 |d| ln(r_max / r_min))` for `|d|` in `[r_min, r_max]`.
     #[must_use]
     pub fn single_log_density(&self, d: f64) -> f64 {
-        let r = d.abs();
-        if self.in_support(r) {
-            -(r * self.log_ratio()).ln() - LN_2
-        } else {
-            f64::NEG_INFINITY
-        }
+        self.stage().single_log_density(d)
     }
 }
 
@@ -158,14 +140,9 @@ impl Default for PairwiseKelemenParams {
     }
 }
 
-/// A group of coordinates moved together: a pair (a point of the 2-torus) or a lone coordinate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Group {
-    /// Two coordinates (interleaved indices), moved as a point of the plane.
-    Pair(usize, usize),
-    /// A coordinate without a partner (the last one of a stream of odd dimension).
-    Single(usize),
-}
+/// A group of coordinates moved together: a pair (a point of the 2-torus) or a lone coordinate
+/// (re-exported from [`mcmc_core::delayed_rejection::Group`], where it lives).
+pub use mcmc_core::delayed_rejection::Group;
 
 /// Which coordinates of a state the pairwise mutations move, and how they pair up: `streams`
 /// streams with `dims[s]` numbers each, numbers `(2k, 2k + 1)` of a stream forming a pair, a
@@ -278,7 +255,8 @@ impl PairLayout {
 /// The pairwise polar Kelemen step (DR paper, Alg. 2, stage 1): every pair of coordinates
 /// moves by `r (cos phi, sin phi)` with `phi` uniform and `r` log-uniform on
 /// `[r_min, r_max]`; a lone coordinate (odd dimension) moves by `+-r` (Kelemen's 1-D step with
-/// the same radius law). Everything wraps around the unit torus. Symmetric.
+/// the same radius law). Everything wraps around the unit torus. Symmetric. It is mcmc-core's
+/// [`RadialKelemen`] on the torus with bounds `params`.
 ///
 /// Its density is a product over groups, each a function of the *minimal torus* distance
 /// `|y - x|` of the group only (circularly symmetric): the property that lets the orbital
@@ -315,71 +293,42 @@ impl PairwiseKelemen {
         Self { params }
     }
 
-    /// A pair `(a, b)` moved by `r (cos phi, sin phi)` and wrapped. Two uniforms: the radius,
-    /// then the angle.
+    /// A pair `(a, b)` moved by `r (cos phi, sin phi)` and wrapped
+    /// ([`RadialKelemen::perturb_pair`]). Two uniforms: the radius, then the angle.
     #[inline]
-    pub fn perturb_pair<R: Rng + ?Sized>(&self, [a, b]: [f64; 2], rng: &mut R) -> [f64; 2] {
-        let r = self.params.radius(rng.random());
-        let (sin, cos) = (TAU * rng.random::<f64>()).sin_cos();
-        [wrap(a + r * cos), wrap(b + r * sin)]
+    pub fn perturb_pair<R: Rng + ?Sized>(&self, pair: [f64; 2], rng: &mut R) -> [f64; 2] {
+        self.params.stage().perturb_pair(pair, rng)
     }
 
-    /// A lone coordinate moved by `+-r` and wrapped. Two uniforms: the radius, then the sign.
+    /// A lone coordinate moved by `+-r` and wrapped ([`RadialKelemen::perturb_single`]). Two
+    /// uniforms: the radius, then the sign.
     #[inline]
     pub fn perturb_single<R: Rng + ?Sized>(&self, a: f64, rng: &mut R) -> f64 {
-        let r = self.params.radius(rng.random());
-        wrap(if rng.random::<f64>() < 0.5 {
-            a + r
-        } else {
-            a - r
-        })
+        self.params.stage().perturb_single(a, rng)
     }
 
     /// Log density of moving the coordinates of `groups` from `from` to `to` (the product of
-    /// the group densities), with the coordinates read by `from(i)` and `to(i)`.
+    /// the group densities), with the coordinates read by `from(i)` and `to(i)`
+    /// ([`RadialKelemen::groups_log_q`]).
     pub fn groups_log_q(
         &self,
         groups: impl Iterator<Item = Group>,
         from: impl Fn(usize) -> f64,
         to: impl Fn(usize) -> f64,
     ) -> f64 {
-        let mut log_q = 0.0;
-        for group in groups {
-            log_q += match group {
-                Group::Pair(a, b) => self.params.pair_log_density(
-                    torus_displacement(from(a), to(a)),
-                    torus_displacement(from(b), to(b)),
-                ),
-                Group::Single(a) => self
-                    .params
-                    .single_log_density(torus_displacement(from(a), to(a))),
-            };
-            if log_q == f64::NEG_INFINITY {
-                break;
-            }
-        }
-        log_q
+        self.params.stage().groups_log_q(groups, from, to)
     }
 }
 
+/// On `Vec<f64>`, paired as [`PairLayout::single_stream`] (mcmc-core's [`RadialKelemen`] on
+/// the torus).
 impl Proposal<Vec<f64>> for PairwiseKelemen {
     fn propose<R: Rng + ?Sized>(&self, x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut R) -> Proposed {
-        y.clone_from(x);
-        for group in PairLayout::single_stream(x.len()).groups(1) {
-            match group {
-                Group::Pair(a, b) => [y[a], y[b]] = self.perturb_pair([x[a], x[b]], rng),
-                Group::Single(a) => y[a] = self.perturb_single(x[a], rng),
-            }
-        }
-        Proposed::symmetric()
+        self.params.stage().propose(x, y, rng)
     }
 
     fn log_q(&self, from: &Vec<f64>, to: &Vec<f64>) -> f64 {
-        if from.len() != to.len() {
-            return f64::NEG_INFINITY;
-        }
-        let layout = PairLayout::single_stream(from.len());
-        self.groups_log_q(layout.groups(1), |i| from[i], |i| to[i])
+        self.params.stage().log_q(from, to)
     }
 
     fn is_symmetric(&self) -> bool {
@@ -391,6 +340,7 @@ impl Proposal<Vec<f64>> for PairwiseKelemen {
 mod tests {
     use super::*;
     use rand::SeedableRng;
+    use std::f64::consts::TAU;
 
     #[test]
     fn params_are_validated_and_presets_match_the_papers() {

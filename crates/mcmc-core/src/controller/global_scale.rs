@@ -1,7 +1,8 @@
 //! Global scale adaptation by the sign rule of the regional-adaptive paper (Alg. 1, eq. 4-6).
 
-use super::{Controller, ScaleTunable};
+use super::Controller;
 use crate::kernel::StepInfo;
+use crate::tunable::ScaleTunable;
 use crate::McmcError;
 
 /// Parameters of the sign-rule scale adaptation (regional-adaptive paper, section 4.2 and

@@ -1,8 +1,9 @@
 //! Automatic large-step probability (Zsolnai & Szirmay-Kalos 2013, "Automatic Parameter
 //! Control for Metropolis Light Transport").
 
-use super::{Controller, LargeStepTunable};
+use super::Controller;
 use crate::kernel::StepInfo;
+use crate::tunable::LargeStepTunable;
 use crate::McmcError;
 
 /// Threshold on `eta_l / eta_0` below which the integrand is considered not flattened by the

@@ -1,15 +1,25 @@
-//! How to learn: adaptation controllers and the tunable interfaces they act through.
+//! How to learn: adaptation controllers, which tune kernels through the interfaces of
+//! [`crate::tunable`] (re-exported here).
 
 mod global_scale;
 mod large_step;
+mod regional_pool;
 mod regional_scale;
+mod shared;
 
 pub use global_scale::{AdaptState, GlobalScale, ScaleAdaptParams};
 pub use large_step::{
     automatic_large_step_probability, AutoLargeStep, LargeStepEstimate, LargeStepStats,
     FLATNESS_THRESHOLD, NOT_FLAT_LARGE_STEP_PROBABILITY,
 };
-pub use regional_scale::{RegionStats, RegionalScale, RegionalScaleParams};
+pub use regional_pool::PooledRegionalScales;
+pub use regional_scale::{RegionStats, RegionalScale, RegionalScaleParams, MAX_VISITS_PER_ROUND};
+pub use shared::{Both, SharedController};
+
+/// The tunable interfaces, re-exported from [`crate::tunable`] where they live.
+pub use crate::tunable::{
+    HasSharedScales, LargeStepTunable, RegionalTunable, ScaleTunable, SharedRegionalScales,
+};
 
 use crate::kernel::StepInfo;
 
@@ -39,41 +49,4 @@ impl<K: ?Sized, S> Controller<K, S> for NoAdaptation {
     fn is_frozen(&self) -> bool {
         true
     }
-}
-
-/// A kernel or proposal with one global scale `lambda = log sigma^2`.
-pub trait ScaleTunable {
-    /// The current `lambda`.
-    fn log_scale(&self) -> f64;
-    /// Sets `lambda`.
-    fn set_log_scale(&mut self, lambda: f64);
-}
-
-/// A kernel or proposal with one scale per region of a partition.
-pub trait RegionalTunable<S> {
-    /// The region containing `x`.
-    fn region_of(&self, x: &S) -> usize;
-    /// Number of regions.
-    fn num_regions(&self) -> usize;
-    /// `lambda` of a region.
-    fn log_scale_of(&self, region: usize) -> f64;
-    /// Sets `lambda` of a region.
-    fn set_log_scale_of(&mut self, region: usize, lambda: f64);
-    /// Splits a region (children inherit its scale); returns the fresh ids of the children
-    /// other than `region` itself (see [`crate::Partition::split`]), or `None` if the
-    /// partition cannot refine.
-    fn split_region(&mut self, region: usize) -> Option<std::ops::Range<usize>> {
-        let _ = region;
-        None
-    }
-}
-
-/// A kernel or proposal mixing small steps with large (independent) steps.
-pub trait LargeStepTunable {
-    /// The probability of a large step.
-    fn large_step_probability(&self) -> f64;
-    /// Sets the probability of a large step (in `(0, 1]`).
-    fn set_large_step_probability(&mut self, p: f64);
-    /// True if mixture component `component` is the large step.
-    fn is_large_step(&self, component: usize) -> bool;
 }

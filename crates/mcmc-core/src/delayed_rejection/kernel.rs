@@ -4,14 +4,15 @@ use rand::{Rng, RngExt};
 
 use super::arithmetic::{NoGhost, StateArithmetic};
 use super::rule::{ln_accept_from_ratio, ln_one_minus, DrRule};
-use crate::controller::LargeStepTunable;
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, ConditionalProposal, Proposal, Proposed, MAX_COMPONENTS};
 use crate::target::{Point, Sample, SampleOf, Target};
+use crate::tunable::LargeStepTunable;
 use crate::McmcError;
 
 /// Two-stage delayed-rejection Metropolis-Hastings (Tierney & Mira 1999; Green & Mira 2001;
-/// the DR paper, ../shared/papers/delayed-rejection-mlt.txt, section 4 and Alg. 1).
+/// the DR paper, Rioux-Lavoie, Litalien et al. 2020, section 4 and Alg. 1;
+/// docs/methods/drmlt.md).
 ///
 /// A step proposes `y` from the current state `x` with the first-stage [`Proposal`] `Q1`
 /// (possibly a [`crate::Mixture`]) and accepts it with the MH probability `a1` (eq. 5). If `y`
@@ -159,8 +160,8 @@ impl<P1, P2, A> DelayedRejection<P1, P2, A> {
     }
 
     /// Restricts the second stage to components the first stage does not call large steps
-    /// ([`LargeStepTunable::is_large_step`]): the reference implementation's rule (no second
-    /// stage after a large step; ../shared/notes/reference-implementations.md, section 2).
+    /// ([`LargeStepTunable::is_large_step`]): the authors' code's rule (no second stage after a
+    /// large step; docs/methods/drmlt.md, "Mixtures and large steps").
     #[must_use]
     pub fn second_stage_after_small_steps(mut self) -> Self
     where

@@ -1,15 +1,14 @@
 //! How MALA learns: the adaptation state `theta` and the proposal Gaussian it implies at a
 //! point (plain, online, full online, cache-driven, hybrid).
 
-use nalgebra::DMatrix;
-
 use super::cache::Neighbours;
 use super::cache_view::CacheView;
+#[cfg(feature = "nalgebra")]
+use super::full_online::FullOnline;
 use super::gaussian::ProposalGaussian;
 use super::params::LangevinParams;
 
-/// The adaptation of MALA with adaptation (Alg. 1-4 of
-/// ../shared/papers/langevin-mcmc-rendering.txt): a parameter `theta` (the accumulated
+/// The adaptation of MALA with adaptation (Luan et al. 2020, Alg. 1-4): a parameter `theta` (the accumulated
 /// gradient statistics, or the gradient cache) and the rule that forms the proposal
 /// Gaussian at a point `u` from `theta` and the truncated gradient `g(u)`.
 ///
@@ -69,7 +68,11 @@ fn with_buffers<R>(n: usize, f: impl FnOnce(&mut [f64], &mut [f64]) -> R) -> R {
 
 /// The diminishing-adaptation weights `(t^-c1, t^-c2)` of step `steps + 1` (eq. 19-20), or
 /// `(1, 1)` without diminishing adaptation.
-fn diminishing_weights(params: &LangevinParams, steps: u64, diminishing: bool) -> (f64, f64) {
+pub(super) fn diminishing_weights(
+    params: &LangevinParams,
+    steps: u64,
+    diminishing: bool,
+) -> (f64, f64) {
     if diminishing {
         let t = (steps + 1) as f64;
         (t.powf(-params.c1), t.powf(-params.c2))
@@ -244,95 +247,6 @@ impl Adaptation for Online {
         self.ensure_dim(g.len());
         for ((g2, d), &gi) in self.g2.iter_mut().zip(&mut self.d).zip(g) {
             *g2 = params.beta * *g2 + (1.0 - params.beta) * gi * gi;
-            *d = params.alpha * *d + (1.0 - params.alpha) * gi;
-        }
-        self.t += 1;
-    }
-    fn freeze(&mut self) {
-        self.frozen = true;
-    }
-    fn is_frozen(&self) -> bool {
-        self.frozen
-    }
-}
-
-/// Online adaptation with *full* preconditioning (section 5, eq. 13, the paper's Fig. 2
-/// "full"): `G' = beta G + (1 - beta) g g^T`, `H = (1 - w1) I + w1 (delta I + G'^(1/2))`
-/// (matrix square root by symmetric eigendecomposition), `M = H^-1`; momentum as
-/// [`Online`]. Only on spaces that do not wrap (the images of a full Gaussian on the torus do
-/// not factorise). Allocates per step: it exists for the 2-D comparison.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FullOnline {
-    g2: DMatrix<f64>,
-    d: Vec<f64>,
-    t: u64,
-    diminishing: bool,
-    frozen: bool,
-}
-
-impl FullOnline {
-    /// Full online adaptation, with or without diminishing adaptation.
-    #[must_use]
-    pub fn new(diminishing: bool) -> Self {
-        Self {
-            g2: DMatrix::zeros(0, 0),
-            d: Vec::new(),
-            t: 0,
-            diminishing,
-            frozen: false,
-        }
-    }
-
-    fn ensure_dim(&mut self, n: usize) {
-        if self.d.len() != n {
-            self.g2 = DMatrix::zeros(n, n);
-            self.d = vec![0.0; n];
-        }
-    }
-}
-
-impl Adaptation for FullOnline {
-    fn name(&self) -> &'static str {
-        "full-online"
-    }
-    fn needs_gradient(&self, _dim: usize) -> bool {
-        true
-    }
-    fn gaussian(
-        &mut self,
-        params: &LangevinParams,
-        _u: &[f64],
-        g: &[f64],
-        out: &mut ProposalGaussian,
-    ) -> bool {
-        let n = g.len();
-        self.ensure_dim(n);
-        let (w1, w2) = diminishing_weights(params, self.t, self.diminishing);
-        let gv = nalgebra::DVector::from_column_slice(g);
-        let g2 = &self.g2 * params.beta + (&gv * gv.transpose()) * (1.0 - params.beta);
-        let eig = nalgebra::SymmetricEigen::new(g2);
-        let sqrt_vals = eig.eigenvalues.map(|v| v.max(0.0).sqrt());
-        let sqrt_g =
-            &eig.eigenvectors * DMatrix::from_diagonal(&sqrt_vals) * eig.eigenvectors.transpose();
-        let identity = DMatrix::<f64>::identity(n, n);
-        let h = &identity * (1.0 - w1) + (&identity * params.delta + sqrt_g) * w1;
-        let Some(m) = h.try_inverse() else {
-            return out.set_full(params, &identity, g);
-        };
-        let m = (&m + m.transpose()) * 0.5;
-        let drift: Vec<f64> = (0..n)
-            .map(|i| g[i] + w2 * (params.alpha * self.d[i] + (1.0 - params.alpha) * g[i]))
-            .collect();
-        out.set_full(params, &m, &drift)
-    }
-    fn adapt(&mut self, params: &LangevinParams, _u: &[f64], g: &[f64], _first_visit: bool) {
-        if self.frozen {
-            return;
-        }
-        self.ensure_dim(g.len());
-        let gv = nalgebra::DVector::from_column_slice(g);
-        self.g2 = &self.g2 * params.beta + (&gv * gv.transpose()) * (1.0 - params.beta);
-        for (d, &gi) in self.d.iter_mut().zip(g) {
             *d = params.alpha * *d + (1.0 - params.alpha) * gi;
         }
         self.t += 1;
@@ -624,7 +538,8 @@ pub enum AnyAdaptation {
     Plain(Plain),
     /// [`Online`].
     Online(Online),
-    /// [`FullOnline`].
+    /// [`FullOnline`] (feature `nalgebra`).
+    #[cfg(feature = "nalgebra")]
     Full(FullOnline),
     /// [`CacheDriven`].
     Cache(CacheDriven),
@@ -637,6 +552,7 @@ macro_rules! each_adaptation {
         match $self {
             AnyAdaptation::Plain($a) => $e,
             AnyAdaptation::Online($a) => $e,
+            #[cfg(feature = "nalgebra")]
             AnyAdaptation::Full($a) => $e,
             AnyAdaptation::Cache($a) => $e,
             AnyAdaptation::Hybrid($a) => $e,

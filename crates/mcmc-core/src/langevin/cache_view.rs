@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use super::cache::{GradientCache, Neighbours};
 
-/// The gradient cache `C` as one chain sees it (section 6 of
-/// ../shared/papers/langevin-mcmc-rendering.txt): a *shared* snapshot (entries pooled from
+/// The gradient cache `C` as one chain sees it (Luan et al. 2020, section 6;
+/// docs/methods/mala.md, "Sharing the cache among chains"): a *shared* snapshot (entries pooled from
 /// all chains at the last round boundary of the render loop, read-only, behind an `Arc`)
 /// plus a *local* cache of the entries this chain added since. Queries search both; the
 /// capacity `H` counts both, so a chain alone fills its local cache to `H` and freezes.

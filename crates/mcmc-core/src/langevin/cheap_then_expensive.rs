@@ -9,20 +9,19 @@ use super::gaussian::ProposalGaussian;
 use super::kernel::{CurrentGradient, NoMove, LARGE_STEP_COMPONENT};
 use super::params::LangevinParams;
 use super::space::LangevinSpace;
-use crate::controller::LargeStepTunable;
 use crate::delayed_rejection::rule::{ln_accept_from_ratio, ln_one_minus};
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::mh::mh_decide;
 use crate::proposal::{log_sum_exp, Proposal};
 use crate::target::{DifferentiableTarget, Point, Sample, SampleOf};
+use crate::tunable::LargeStepTunable;
 use crate::McmcError;
 
 /// Two-stage delayed rejection whose first stage is *cheap* — an isotropic Gaussian random
 /// walk of standard deviation `sigma1`, evaluated without gradient — and whose second stage
 /// is *expensive* — a MALA step from the current state with the [`Adaptation`]'s Gaussian,
-/// its candidate evaluated with gradient — under Green & Mira's rule (DR paper,
-/// ../shared/papers/delayed-rejection-mlt.txt, section 5.2, which used H2MC for the second
-/// stage; eq. 12-14).
+/// its candidate evaluated with gradient — under Green & Mira's rule (DR paper, section 5.2,
+/// which used H2MC for the second stage; eq. 12-14; docs/methods/mala.md).
 ///
 /// After a rejected `y`, `z ~ N(x + Sigma(x) m(x) / 2, Sigma(x))` and the ghost is
 /// `y* = z - (y - x)` (wrapped on a torus). Because the first stage is a symmetric walk and

@@ -1,5 +1,6 @@
 //! The Gaussian a MALA step proposes from: `N(u + Sigma m / 2, Sigma)`, diagonal or full.
 
+#[cfg(feature = "nalgebra")]
 use nalgebra::{DMatrix, DVector};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -9,9 +10,10 @@ use super::params::LangevinParams;
 const LN_SQRT_2PI: f64 = 0.918_938_533_204_672_7;
 
 /// The proposal Gaussian of one MALA step, as an *offset* from the point it is formed at:
-/// `offset ~ N(mu, Sigma)` with `Sigma = epsilon M` and `mu = Sigma m / 2` (eq. 8-9, 18, 28 of
-/// ../shared/papers/langevin-mcmc-rendering.txt). Diagonal `Sigma` (the paper's algorithms)
-/// or full `Sigma` (its Fig. 2 comparison, section 5), stored with its Cholesky factor.
+/// `offset ~ N(mu, Sigma)` with `Sigma = epsilon M` and `mu = Sigma m / 2` (Luan et al. 2020,
+/// eq. 8-9, 18, 28). Diagonal `Sigma` (the paper's algorithms)
+/// or full `Sigma` (its Fig. 2 comparison, section 5; feature `nalgebra`), stored with its
+/// Cholesky factor.
 ///
 /// Buffers are reused: forming a Gaussian of the same dimension again does not allocate
 /// (the full form allocates its matrices; it exists for the 2-D comparison).
@@ -32,6 +34,7 @@ pub struct ProposalGaussian {
     mean: Vec<f64>,
     std: Vec<f64>,
     /// Lower Cholesky factor of `Sigma` for the full form.
+    #[cfg(feature = "nalgebra")]
     chol: Option<DMatrix<f64>>,
     /// `-sum ln std_i - d ln sqrt(2 pi)` (or the full form's `-ln det L - ...`).
     log_norm: f64,
@@ -43,7 +46,10 @@ impl ProposalGaussian {
     /// `Sigma_ii = 1 / (1 / (epsilon M_ii) + 1 / max_std^2)`, `mu_i = Sigma_ii m_i / 2`.
     pub fn set_diagonal(&mut self, params: &LangevinParams, m_diag: &[f64], drift: &[f64]) {
         debug_assert_eq!(m_diag.len(), drift.len());
-        self.chol = None;
+        #[cfg(feature = "nalgebra")]
+        {
+            self.chol = None;
+        }
         self.mean.clear();
         self.std.clear();
         let [lo, hi] = params.preconditioner_range;
@@ -64,6 +70,7 @@ impl ProposalGaussian {
     /// (`d x d`) and the drift: `Sigma = (1 / (epsilon M) + I / max_std^2)^-1` in the
     /// matrix sense, `mu = Sigma m / 2`. Returns `false` (leaving an isotropic Gaussian of
     /// variance `epsilon`) if `Sigma` is not positive definite.
+    #[cfg(feature = "nalgebra")]
     pub fn set_full(&mut self, params: &LangevinParams, m: &DMatrix<f64>, drift: &[f64]) -> bool {
         let d = drift.len();
         let mut sigma = m * params.epsilon;
@@ -92,6 +99,7 @@ impl ProposalGaussian {
         true
     }
 
+    #[cfg(feature = "nalgebra")]
     fn isotropic_fallback(&mut self, params: &LangevinParams, d: usize) -> bool {
         let ones = vec![1.0; d];
         let zeros = vec![0.0; d];
@@ -128,27 +136,32 @@ impl ProposalGaussian {
     /// True for the full (non-diagonal) form.
     #[must_use]
     pub fn is_full(&self) -> bool {
-        self.chol.is_some()
+        #[cfg(feature = "nalgebra")]
+        {
+            self.chol.is_some()
+        }
+        #[cfg(not(feature = "nalgebra"))]
+        {
+            false
+        }
     }
 
     /// Draws an offset into `out` (resized to the dimension).
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut Vec<f64>) {
         out.clear();
-        match &self.chol {
-            None => {
-                for (&m, &s) in self.mean.iter().zip(&self.std) {
-                    let w: f64 = StandardNormal.sample(rng);
-                    out.push(m + s * w);
-                }
+        #[cfg(feature = "nalgebra")]
+        if let Some(l) = &self.chol {
+            let d = self.mean.len();
+            let w: Vec<f64> = (0..d).map(|_| StandardNormal.sample(rng)).collect();
+            for i in 0..d {
+                let lw: f64 = (0..=i).map(|j| l[(i, j)] * w[j]).sum();
+                out.push(self.mean[i] + lw);
             }
-            Some(l) => {
-                let d = self.mean.len();
-                let w: Vec<f64> = (0..d).map(|_| StandardNormal.sample(rng)).collect();
-                for i in 0..d {
-                    let lw: f64 = (0..=i).map(|j| l[(i, j)] * w[j]).sum();
-                    out.push(self.mean[i] + lw);
-                }
-            }
+            return;
+        }
+        for (&m, &s) in self.mean.iter().zip(&self.std) {
+            let w: f64 = StandardNormal.sample(rng);
+            out.push(m + s * w);
         }
     }
 
@@ -156,39 +169,36 @@ impl ProposalGaussian {
     #[must_use]
     pub fn log_density(&self, offset: &[f64]) -> f64 {
         debug_assert_eq!(offset.len(), self.mean.len());
-        match &self.chol {
-            None => {
-                let q: f64 = offset
-                    .iter()
-                    .zip(&self.mean)
-                    .zip(&self.std)
-                    .map(|((&o, &m), &s)| {
-                        let z = (o - m) / s;
-                        z * z
-                    })
-                    .sum();
-                self.log_norm - 0.5 * q
+        #[cfg(feature = "nalgebra")]
+        if let Some(l) = &self.chol {
+            // Solve L z = offset - mu by forward substitution.
+            let d = self.mean.len();
+            let mut q = 0.0;
+            let mut z = [0.0f64; 64];
+            let mut zv = Vec::new();
+            let z: &mut [f64] = if d <= 64 {
+                &mut z[..d]
+            } else {
+                zv.resize(d, 0.0);
+                &mut zv
+            };
+            for i in 0..d {
+                let s: f64 = (0..i).map(|j| l[(i, j)] * z[j]).sum();
+                z[i] = (offset[i] - self.mean[i] - s) / l[(i, i)];
+                q += z[i] * z[i];
             }
-            Some(l) => {
-                // Solve L z = offset - mu by forward substitution.
-                let d = self.mean.len();
-                let mut q = 0.0;
-                let mut z = [0.0f64; 64];
-                let mut zv = Vec::new();
-                let z: &mut [f64] = if d <= 64 {
-                    &mut z[..d]
-                } else {
-                    zv.resize(d, 0.0);
-                    &mut zv
-                };
-                for i in 0..d {
-                    let s: f64 = (0..i).map(|j| l[(i, j)] * z[j]).sum();
-                    z[i] = (offset[i] - self.mean[i] - s) / l[(i, i)];
-                    q += z[i] * z[i];
-                }
-                self.log_norm - 0.5 * q
-            }
+            return self.log_norm - 0.5 * q;
         }
+        let q: f64 = offset
+            .iter()
+            .zip(&self.mean)
+            .zip(&self.std)
+            .map(|((&o, &m), &s)| {
+                let z = (o - m) / s;
+                z * z
+            })
+            .sum();
+        self.log_norm - 0.5 * q
     }
 
     /// Log density of landing at displacement `offset` (each component in `[-1/2, 1/2]`)
@@ -199,7 +209,7 @@ impl ProposalGaussian {
     /// full form.
     #[must_use]
     pub fn log_density_wrapped(&self, offset: &[f64]) -> f64 {
-        if self.chol.is_some() {
+        if self.is_full() {
             return f64::NAN;
         }
         let mut total = 0.0;
@@ -231,6 +241,7 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
 
+    #[cfg(feature = "nalgebra")]
     #[test]
     fn diagonal_and_full_agree_for_a_diagonal_matrix() {
         let p = LangevinParams::luan2020();
@@ -263,6 +274,7 @@ mod tests {
         assert!((sum - 1.0).abs() < 1e-9, "{sum}");
     }
 
+    #[cfg(feature = "nalgebra")]
     #[test]
     fn samples_match_the_moments() {
         let p = LangevinParams::luan2020();

@@ -7,11 +7,11 @@ use super::adaptation::Adaptation;
 use super::gaussian::ProposalGaussian;
 use super::params::LangevinParams;
 use super::space::LangevinSpace;
-use crate::controller::LargeStepTunable;
 use crate::kernel::{mh_accept_prob, mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::mh::mh_decide;
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
 use crate::target::{DifferentiableTarget, Point, SampleOf};
+use crate::tunable::LargeStepTunable;
 use crate::McmcError;
 
 /// A proposal that is never selected (the default large step and fallback of [`Langevin`]).
@@ -95,8 +95,8 @@ impl CurrentGradient {
     }
 }
 
-/// The Metropolis-adjusted Langevin algorithm with adaptation (Luan et al. 2020,
-/// ../shared/papers/langevin-mcmc-rendering.txt, Alg. 1): with probability `p_large` a large
+/// The Metropolis-adjusted Langevin algorithm with adaptation (Luan et al. 2020, Alg. 1):
+/// with probability `p_large` a large
 /// step (any [`Proposal`], e.g. an independent uniform sample), with probability
 /// `p_fallback` a plain fallback step (any proposal, e.g. an isotropic Gaussian that escapes
 /// states where the gradient misleads), otherwise a MALA step from the [`Adaptation`]'s

@@ -1,12 +1,12 @@
 //! Langevin Monte Carlo: the Metropolis-adjusted Langevin algorithm (MALA) with online,
-//! cache-driven and hybrid adaptation (Luan et al. 2020,
-//! ../shared/papers/langevin-mcmc-rendering.txt, sections 4-7, Alg. 1-4), and the
+//! cache-driven and hybrid adaptation (Luan et al. 2020, "Langevin Monte Carlo Rendering with
+//! Gradient-based Adaptation", sections 4-7, Alg. 1-4), and the
 //! "cheap-then-expensive" delayed-rejection kernel with a MALA second stage (DR paper,
 //! section 5.2).
 //!
 //! The parts follow the crate's separation: [`LangevinParams`] (configuration with the
 //! paper's and the authors' code's presets), [`Adaptation`] (how to learn: [`Plain`],
-//! [`Online`], [`FullOnline`], [`CacheDriven`], [`Hybrid`]; the adaptation state and the
+//! [`Online`], `FullOnline` (feature `nalgebra`), [`CacheDriven`], [`Hybrid`]; the adaptation state and the
 //! Gaussian it implies at a point), [`LangevinSpace`] (the coordinates moved, Euclidean or
 //! torus), and the kernels [`Langevin`] and [`CheapThenExpensive`] (how to decide). A
 //! [`GradientCache`] (a k-d tree with a bounded K-nearest-within-radius query) backs the
@@ -33,18 +33,20 @@ mod adaptation;
 pub mod cache;
 mod cache_view;
 mod cheap_then_expensive;
+#[cfg(feature = "nalgebra")]
+mod full_online;
 mod gaussian;
 mod kernel;
 mod params;
 mod sharing;
 mod space;
 
-pub use adaptation::{
-    Adaptation, AnyAdaptation, CacheDriven, FullOnline, Hybrid, Online, PerDimension, Plain,
-};
+pub use adaptation::{Adaptation, AnyAdaptation, CacheDriven, Hybrid, Online, PerDimension, Plain};
 pub use cache::{GradientCache, Neighbour, Neighbours};
 pub use cache_view::{CacheView, PooledCache};
 pub use cheap_then_expensive::CheapThenExpensive;
+#[cfg(feature = "nalgebra")]
+pub use full_online::FullOnline;
 pub use gaussian::ProposalGaussian;
 pub use kernel::{
     HasGradientCache, Langevin, NoMove, FALLBACK_COMPONENT, LARGE_STEP_COMPONENT, MALA_COMPONENT,

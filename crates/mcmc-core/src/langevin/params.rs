@@ -3,7 +3,7 @@
 use crate::McmcError;
 
 /// Parameters of the Metropolis-adjusted Langevin algorithm with adaptation (Luan et al.
-/// 2020, ../shared/papers/langevin-mcmc-rendering.txt, Alg. 1-4). Plain data with
+/// 2020, Alg. 1-4). Plain data with
 /// documented defaults ([`LangevinParams::luan2020`]); [`LangevinParams::validate`] checks
 /// the ranges.
 ///
@@ -13,7 +13,7 @@ use crate::McmcError;
 /// paper does not have are off in the paper preset: [`LangevinParams::preconditioner_range`]
 /// clamps the diagonal of `M`, and [`LangevinParams::max_std`] adds a Gaussian "shrink prior"
 /// of that standard deviation to the proposal's precision, `Sigma^-1 + I / max_std^2`
-/// (the authors' code does both: ../shared/notes/reference-implementations.md, section 1).
+/// (the authors' code does both; docs/methods/mala.md, "Readings and deliberate departures").
 ///
 /// # Example
 /// ```
@@ -84,7 +84,7 @@ impl LangevinParams {
     }
 
     /// The values of the authors' public code (`dptoptions.h`, `global_cache.h`;
-    /// ../shared/notes/reference-implementations.md, section 1): `epsilon = 0.005`, `K = 5`,
+    /// docs/methods/mala.md): `epsilon = 0.005`, `K = 5`,
     /// `H = 3000`, preconditioner clamped to `[0.01, 100]`, shrink prior 0.005; the other
     /// values as [`LangevinParams::luan2020`]. Only the values: our formulas stay the paper's.
     #[must_use]

@@ -2,12 +2,11 @@
 
 use super::cache_view::PooledCache;
 use super::kernel::HasGradientCache;
-use crate::controller::Controller;
+use crate::controller::{Controller, SharedController};
 use crate::kernel::StepInfo;
-use crate::render_loop::SharedController;
 
 /// The controller that shares the gradient cache of cache-driven and hybrid MALA among all
-/// chains of a [`crate::render_loop::RenderLoop`]: at every round boundary each chain's new
+/// chains of a render loop (`render_loop::RenderLoop`, feature `parallel`): at every round boundary each chain's new
 /// entries are appended to the pooled cache in job order and chain order (until it holds
 /// `H`), and every chain receives the pooled cache as its new shared snapshot. Within a round a
 /// chain sees the snapshot plus its own new entries; so the image is identical for any

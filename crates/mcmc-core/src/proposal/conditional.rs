@@ -1,7 +1,7 @@
 //! Second-stage proposals of delayed rejection: a move that sees both the current state and
 //! the candidate the first stage proposed and the kernel rejected (Tierney & Mira 1999; Green &
-//! Mira 2001; the delayed-rejection MLT paper, ../shared/papers/delayed-rejection-mlt.txt,
-//! section 4).
+//! Mira 2001; the delayed-rejection MLT paper, Rioux-Lavoie, Litalien et al. 2020, section 4;
+//! docs/methods/drmlt.md).
 
 use rand::Rng;
 

@@ -3,6 +3,7 @@
 use rand::{Rng, RngExt};
 
 use super::{log_sum_exp, Proposal, Proposed};
+use crate::tunable::HasSharedScales;
 use crate::McmcError;
 
 /// Selection probabilities `s(j | x)` of a [`Mixture`]'s components.
@@ -179,5 +180,20 @@ impl<S, P: Proposal<S>, Sel: Selection<S>> Proposal<S> for Mixture<P, Sel> {
     fn log_hastings(&self, j: usize, x: &S, y: &S) -> f64 {
         let (px, py) = (self.probs(x)[j], self.probs(y)[j]);
         self.components[j].log_hastings(0, x, y) + py.ln() - px.ln()
+    }
+}
+
+/// The handle of the first component that has one.
+impl<P: HasSharedScales, Sel> HasSharedScales for Mixture<P, Sel> {
+    type Scales = P::Scales;
+    fn shared_scales(&self) -> Option<&P::Scales> {
+        self.components()
+            .iter()
+            .find_map(HasSharedScales::shared_scales)
+    }
+    fn shared_scales_mut(&mut self) -> Option<&mut P::Scales> {
+        self.components_mut()
+            .iter_mut()
+            .find_map(HasSharedScales::shared_scales_mut)
     }
 }

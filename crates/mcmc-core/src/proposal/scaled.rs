@@ -3,8 +3,8 @@
 use rand::Rng;
 
 use super::{Proposal, Proposed};
-use crate::controller::{RegionalTunable, ScaleTunable};
 use crate::partition::Partition;
+use crate::tunable::{RegionalTunable, ScaleTunable};
 
 /// A proposal family indexed by a scale `lambda = log sigma^2` (regional-adaptive paper,
 /// eq. 4): the thing adaptive controllers tune.

@@ -6,10 +6,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::shared::SharedController;
 use super::splat::{SplatObserver, SplatPayload, SplatSink};
 use crate::chain::Chain;
 use crate::controller::Controller;
+use crate::controller::SharedController;
 use crate::kernel::Kernel;
 use crate::progress::Progress;
 use crate::target::Target;

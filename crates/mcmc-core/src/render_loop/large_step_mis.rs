@@ -72,9 +72,9 @@
 use rand::Rng;
 
 use super::ChainSlot;
-use crate::controller::LargeStepTunable;
 use crate::kernel::{Kernel, Observer, StepInfo};
 use crate::target::{Sample, SampleOf, Target};
+use crate::tunable::LargeStepTunable;
 
 /// Wraps a single-stage kernel with a large step and splats with Kelemen et al. 2002's
 /// multiple-importance combination of the large-step samples and the Metropolis samples

@@ -30,14 +30,15 @@
 mod bootstrap;
 mod jobs;
 mod large_step_mis;
-mod shared;
 mod splat;
 
+/// The shared-statistics controller interface, re-exported from [`crate::controller`] where
+/// it lives.
+pub use crate::controller::{Both, SharedController};
 pub use bootstrap::{bootstrap_key, ChainAllocation, IndependentStates};
 #[cfg(feature = "testing")]
 pub(crate) use large_step_mis::mis_step;
 pub use large_step_mis::LargeStepMis;
-pub use shared::{Both, SharedController};
 pub use splat::{Splat, SplatGrid, SplatObserver, SplatPayload, SplatSink};
 
 use std::sync::atomic::AtomicBool;

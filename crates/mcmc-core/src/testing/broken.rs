@@ -1,17 +1,18 @@
 //! Negative controls: deliberately broken proposals and kernels that the harness must reject.
 //!
 //! A correctness test that cannot fail proves nothing. Each control here reproduces a bug
-//! seen in real MLT code (DESIGN.md, "Negative controls"); tests show the harness catches it
+//! seen in real MLT code (docs/architecture.md, "Using the correctness harness from another
+//! crate"); tests show the harness catches it
 //! on the same target and proposal where the correct kernel passes. Other crates reuse them to
 //! show their own tests have teeth.
 
 use rand::Rng;
 
-use crate::controller::LargeStepTunable;
 use crate::kernel::{mh_log_accept_prob, Kernel, Observer, StepInfo};
 use crate::proposal::{log_sum_exp, Proposal, Proposed};
 use crate::render_loop::mis_step;
 use crate::target::{Sample, SampleOf, Target};
+use crate::tunable::LargeStepTunable;
 
 /// Wraps an asymmetric proposal and *claims* it is symmetric: `propose` reports a Hastings
 /// term of 0 and `is_symmetric` returns true, while `log_q` stays the true density.
@@ -111,8 +112,8 @@ impl<T: Target, P: Proposal<T::State>> Kernel<T> for MhWithoutHastings<P> {
 
 /// Forces acceptance of the candidate after `max_rejections` consecutive rejections, as
 /// LuxRender's and Corona's Metropolis samplers do ("maxconsecrejects") to escape sticky
-/// states. It breaks detailed balance (DESIGN.md: "No forced acceptance after many
-/// rejections"), which the stationarity test exposes.
+/// states. It breaks detailed balance (the chain is no longer a Markov chain on the state
+/// alone, and its stationary law is not `pi`), which the stationarity test exposes.
 ///
 /// The wrapped kernel runs normally; if it rejected and the previous `max_rejections` steps
 /// were all rejections, the last candidate it evaluated (left in

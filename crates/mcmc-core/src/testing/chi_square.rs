@@ -2,18 +2,19 @@
 //!
 //! Public so that other crates (e.g. the render crate's BSDF sampling tests, pbrt style) can
 //! reuse it. The survival function is the regularised upper incomplete gamma
-//! `Q(k/2, x/2)` of [`crate::toy::special`], written from Numerical Recipes' series and
+//! `Q(k/2, x/2)` of [`crate::special`], written from Numerical Recipes' series and
 //! continued fraction (NR 3rd ed., section 6.2).
 
 use std::fmt;
 
-pub use crate::toy::special::{chi_square_cdf, chi_square_sf as survival};
+pub use crate::special::{chi_square_cdf, chi_square_sf as survival};
 
-/// The significance level of one stationarity test (DESIGN.md: alpha = 0.01).
+/// The significance level of one stationarity test (alpha = 0.01; Sidak-corrected over the
+/// tests of a file by `ChiSquareReport::assert_passes`).
 pub const ALPHA: f64 = 0.01;
 
 /// The minimum expected count per bin after pooling (the usual rule of thumb for the
-/// chi-square approximation to Pearson's statistic; DESIGN.md).
+/// chi-square approximation to Pearson's statistic).
 pub const MIN_EXPECTED: f64 = 5.0;
 
 /// The Sidak-corrected per-test level `1 - (1 - alpha)^(1/m)` that keeps the probability of

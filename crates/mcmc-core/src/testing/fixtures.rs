@@ -230,7 +230,7 @@ impl Proposal<Vec<f64>> for LargeStepWalk {
     }
 }
 
-impl crate::controller::LargeStepTunable for LargeStepWalk {
+impl crate::tunable::LargeStepTunable for LargeStepWalk {
     fn large_step_probability(&self) -> f64 {
         self.p_large
     }

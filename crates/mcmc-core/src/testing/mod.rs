@@ -1,6 +1,7 @@
 //! The correctness harness: checks that a kernel leaves its target invariant (feature `testing`).
 //!
-//! Four complementary checks (DESIGN.md, "Tests that prove the maths"), generic over any
+//! Four complementary checks (docs/architecture.md, "Using the correctness harness from another
+//! crate"), generic over any
 //! [`Target`](crate::Target) and [`Kernel`](crate::Kernel), so the `pss`, `pathspace` and
 //! `render` crates run them on their own kernels:
 //!

@@ -3,8 +3,8 @@
 //! If `x_0 ~ pi` exactly and the kernel leaves `pi` invariant, then `x_k ~ pi` exactly for
 //! every `k`. Running N independent chains from independent exact draws therefore gives N
 //! *independent* draws from `pi` after k steps, and a plain chi-square goodness-of-fit test
-//! applies with no autocorrelation correction and no burn-in (DESIGN.md, "Tests that prove the
-//! maths"). Under the hypothesis the p-value is uniform, so a fixed level `alpha` bounds the
+//! applies with no autocorrelation correction and no burn-in (docs/architecture.md, "Using the
+//! correctness harness from another crate"). Under the hypothesis the p-value is uniform, so a fixed level `alpha` bounds the
 //! false-failure probability; a kernel that does not preserve `pi` drifts away from it, and
 //! with enough steps and starts the statistic grows without bound.
 

@@ -2,8 +2,8 @@
 
 use rand::Rng;
 
-use super::special::{bisect_quantile, chi_square_cdf};
 use super::{impl_toy_target, standard_normal, Bins, ToyTarget};
+use crate::special::{bisect_quantile, chi_square_cdf};
 use crate::target::DifferentiableTarget;
 use crate::McmcError;
 

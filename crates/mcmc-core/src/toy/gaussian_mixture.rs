@@ -2,9 +2,9 @@
 
 use rand::{Rng, RngExt};
 
-use super::special::normal_interval;
 use super::{check_positive, impl_toy_target, standard_normal, uniform_edges, Bins, ToyTarget};
 use crate::proposal::log_sum_exp;
+use crate::special::normal_interval;
 use crate::McmcError;
 
 /// One weighted component `w N(mean, diag(sd^2))` of a 2-D mixture.

@@ -1,7 +1,8 @@
 //! Toy targets with exact normalised densities, exact samplers and exact bin probabilities.
 //!
 //! They are the test bench of every kernel: small, cheap, and known in closed form, so a
-//! chain's output can be compared with the truth (DESIGN.md, "Tests that prove the maths").
+//! chain's output can be compared with the truth (docs/architecture.md, "Using the
+//! correctness harness from another crate").
 //! All live on `Vec<f64>` states with no payload.
 //!
 //! | target | dim | what it stresses |
@@ -34,19 +35,20 @@ mod correlated_gaussian;
 mod gaussian_mixture;
 mod piecewise;
 mod ridge;
-pub mod special;
 mod torus_mixture;
 mod uniform_mixture;
 
-/// Re-exported from [`crate::torus`], where it lives.
-pub use crate::torus::wrap;
+/// Special functions, re-exported from [`crate::special`] where they live.
+pub use crate::special;
+/// Re-exported from [`crate::torus`], where they live.
+pub use crate::torus::{wrap, wrapped_normal_pdf};
 pub use banana::Banana;
 pub use bins::{uniform_edges, Bins};
 pub use correlated_gaussian::CorrelatedGaussian;
 pub use gaussian_mixture::{DiagonalGaussian, GaussianMixture2d, MAX_MIXTURE_COMPONENTS};
 pub use piecewise::PiecewiseConstant;
 pub use ridge::Ridge;
-pub use torus_mixture::{wrapped_normal_pdf, TorusMixture};
+pub use torus_mixture::TorusMixture;
 pub use uniform_mixture::UniformMixture;
 
 use rand::Rng;

@@ -11,7 +11,7 @@ use crate::McmcError;
 /// Holes are where kernels that mishandle zero densities go wrong (accepting a zero-density
 /// candidate, dividing by a zero density when leaving one), and where a local proposal must
 /// jump to stay ergodic. It is also the discretisation-friendly target of the exact
-/// finite-state check (DESIGN.md, "Tests that prove the maths").
+/// finite-state check ([`crate::testing::finite_state_check`]).
 ///
 /// Bins: the CDF is piecewise linear, so bin probabilities are exact; holes give bins of
 /// probability 0 (a sample there fails a chi-square test outright).

@@ -2,8 +2,8 @@
 
 use rand::Rng;
 
-use super::special::normal_interval;
 use super::{check_positive, impl_toy_target, standard_normal, uniform_edges, Bins, ToyTarget};
+use crate::special::normal_interval;
 use crate::target::DifferentiableTarget;
 use crate::McmcError;
 

@@ -3,33 +3,14 @@
 use rand::Rng;
 
 use super::gaussian_mixture::{normalise_components, pick_component, DiagonalGaussian};
-use super::special::normal_interval;
 use super::{impl_toy_target, standard_normal, uniform_edges, Bins, ToyTarget};
 use crate::proposal::log_sum_exp;
-use crate::torus::wrap;
+use crate::special::normal_interval;
+use crate::torus::{wrap, wrapped_normal_pdf, WRAPPED_NORMAL_IMAGES};
 use crate::McmcError;
 
-/// Number of periodic images summed on each side (`m = -3..=3`). With `sd <= 0.25` the
-/// nearest omitted image is at least 2.5 / 0.25 = 10 standard deviations away, so the
-/// truncation error is below `Phi(-10) = 7.6e-24`.
-const IMAGES: i32 = 3;
-
-/// Largest standard deviation accepted (see [`IMAGES`]).
+/// Largest standard deviation accepted (see [`WRAPPED_NORMAL_IMAGES`]).
 const MAX_SD: f64 = 0.25;
-
-/// The density of the wrapped normal `sum_{m in Z} N(t + m; mean, sd^2)` at `t`, summing the
-/// images `m = -3..=3`: exact to `1e-23` relative for `sd <= 0.25` and `|t - mean| <= 1`
-/// (e.g. `t` and `mean` in `[0, 1)`, or a difference of two torus points with `mean = 0`).
-#[must_use]
-pub fn wrapped_normal_pdf(t: f64, mean: f64, sd: f64) -> f64 {
-    let norm = 1.0 / (sd * (2.0 * std::f64::consts::PI).sqrt());
-    (-IMAGES..=IMAGES)
-        .map(|m| {
-            let z = (t + f64::from(m) - mean) / sd;
-            norm * (-0.5 * z * z).exp()
-        })
-        .sum()
-}
 
 /// A mixture of *wrapped* axis-aligned Gaussians on the unit torus:
 /// `pi(x) = sum_k w_k prod_d sum_{m in Z} N(x_d + m; mu_kd, s_kd^2)` for `x in [0, 1)^2`,
@@ -92,7 +73,7 @@ impl TorusMixture {
 
     /// Probability that the wrapped normal of one axis falls in `[lo, hi) subset [0, 1)`.
     fn wrapped_interval(lo: f64, hi: f64, mean: f64, sd: f64) -> f64 {
-        (-IMAGES..=IMAGES)
+        (-WRAPPED_NORMAL_IMAGES..=WRAPPED_NORMAL_IMAGES)
             .map(|m| {
                 let m = f64::from(m);
                 normal_interval((lo + m - mean) / sd, (hi + m - mean) / sd)

@@ -3,7 +3,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use mcmc_core::toy::special::normal_interval;
+use mcmc_core::special::normal_interval;
 use rand::{Rng, RngExt};
 
 use crate::vec3::Vec3;

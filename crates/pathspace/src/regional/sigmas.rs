@@ -4,6 +4,7 @@
 use std::ops::Range;
 use std::sync::Arc;
 
+use mcmc_core::controller::SharedRegionalScales;
 use mcmc_core::{Mh, Mixture, Partition};
 
 use super::partition::PathPartition;
@@ -223,6 +224,30 @@ impl<P> SharedSigmas<P> {
     #[must_use]
     pub fn ptr_eq(&self, other: &Self) -> bool {
         Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// The handle mcmc-core's shared regional controller reads and publishes: `lambda` writes and
+/// splits copy the scales first if another chain still holds them (`Arc::make_mut`).
+impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
+    type Partition = P;
+    fn partition(&self) -> &P {
+        self.get().partition()
+    }
+    fn num_regions(&self) -> usize {
+        self.get().num_regions()
+    }
+    fn log_scale_of(&self, region: usize) -> f64 {
+        self.get().lambdas()[region]
+    }
+    fn set_log_scale_of(&mut self, region: usize, lambda: f64) {
+        self.make_mut().set_lambda(region, lambda);
+    }
+    fn split_region(&mut self, region: usize) -> Option<Range<usize>> {
+        self.make_mut().split(region)
+    }
+    fn same_as(&self, other: &Self) -> bool {
+        self.ptr_eq(other)
     }
 }
 

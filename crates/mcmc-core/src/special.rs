@@ -1,8 +1,8 @@
 //! Special functions for exact probabilities: log-gamma, regularised incomplete gamma, normal CDF.
 //!
 //! Written from the formulas (Numerical Recipes, 3rd ed., sections 6.1-6.2; Lanczos 1964), so
-//! that the toy targets' bin probabilities and the chi-square survival function of
-//! `crate::testing` (feature `testing`) need no numerical dependency.
+//! that truncated-normal normalisations, the toy targets' bin probabilities and the chi-square
+//! survival function of `crate::testing` (feature `testing`) need no numerical dependency.
 
 /// Lanczos coefficients for `g = 7`, `n = 9` (relative accuracy about `1e-15` for `x >= 0.5`).
 const LANCZOS_G: f64 = 7.0;
@@ -186,7 +186,8 @@ pub fn chi_square_sf(x: f64, k: f64) -> f64 {
 /// The `x` with `cdf(x) = p` for an increasing `cdf` on `[lo, hi]`, by bisection to machine
 /// precision (used to place equal-probability bin edges; the bins' probabilities are then
 /// recomputed from the edges, so the edges need not be exact).
-pub(crate) fn bisect_quantile(cdf: impl Fn(f64) -> f64, p: f64, mut lo: f64, mut hi: f64) -> f64 {
+#[must_use]
+pub fn bisect_quantile(cdf: impl Fn(f64) -> f64, p: f64, mut lo: f64, mut hi: f64) -> f64 {
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
         if mid <= lo || mid >= hi {

@@ -1,10 +1,9 @@
 //! Statistics that the controllers of all chains share: merged in job order at every round
-//! boundary of the render loop and handed back, so shared adaptation is deterministic.
+//! boundary of a render loop and handed back, so shared adaptation is deterministic.
 
-use crate::controller::Controller;
-use crate::controller::{
-    AutoLargeStep, GlobalScale, LargeStepStats, LargeStepTunable, NoAdaptation, RegionalScale,
-};
+use super::{AutoLargeStep, Controller, GlobalScale, LargeStepStats, NoAdaptation};
+use crate::kernel::StepInfo;
+use crate::tunable::LargeStepTunable;
 
 /// A controller whose statistics are pooled over all chains of a render loop.
 ///
@@ -44,14 +43,6 @@ impl<K: ?Sized> SharedController<K> for GlobalScale {
     fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
 }
 
-/// `RegionalScale` adapts per chain; `pathspace::regional::SharedRegionalAdaptation` is the
-/// regional controller whose statistics are shared through this hook.
-impl<K: ?Sized> SharedController<K> for RegionalScale {
-    type Shared = ();
-    fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}
-    fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
-}
-
 /// Automatic large-step control pooled over chains: a controller made with
 /// [`AutoLargeStep::pooled`] only records during its estimation phase; once the pooled
 /// statistics of all chains hold its `estimation_steps`, every chain sets the same `p_l` from
@@ -78,7 +69,7 @@ impl<K: ?Sized, S, A: Controller<K, S>, B: Controller<K, S>> Controller<K, S> fo
         self.0.before_step(kernel, x);
         self.1.before_step(kernel, x);
     }
-    fn after_step(&mut self, kernel: &mut K, info: &crate::StepInfo) {
+    fn after_step(&mut self, kernel: &mut K, info: &StepInfo) {
         self.0.after_step(kernel, info);
         self.1.after_step(kernel, info);
     }
