@@ -61,6 +61,8 @@
 //! # Ok::<(), experiments::ExperimentError>(())
 //! ```
 
+pub mod calibrate;
+mod columns;
 mod error;
 mod harness;
 mod load;
@@ -76,7 +78,10 @@ mod rundir;
 mod scene;
 mod stats;
 mod table;
+mod toy_study;
 
+pub use calibrate::{Bisection, Calibrated};
+pub use columns::{Column, TableSpec};
 pub use error::ExperimentError;
 pub use harness::Experiment;
 pub use load::LoadAverage;
@@ -87,6 +92,7 @@ pub use record::{Measure, RunRecord};
 pub use regime::Regime;
 pub use results::Results;
 pub use rundir::{scene_manifest, RunDirectory};
-pub use scene::{bundled_scene_names, SceneCase, SCENES_DIR};
+pub use scene::{bundled_scene_names, load_bundled, SceneCase, SCENES_DIR};
 pub use stats::{run_stats, LargeStepStats, RunStats};
 pub use table::{median, median_range, ratio, Table};
+pub use toy_study::{ToyRun, ToyStudy};
