@@ -8,10 +8,13 @@
 
 use std::sync::atomic::AtomicBool;
 
+use render::methods::MethodSettings;
 use render::session::{render, NoProgress, RenderSettings};
 use render::Scene;
 
+use crate::scene::SceneCase;
 use crate::stats::run_stats;
+use crate::table::Table;
 use crate::ExperimentError;
 
 /// Bisection of a monotone measurement `f(parameter)` on `[lo, hi]`, in the parameter or in
@@ -110,12 +113,13 @@ impl Bisection {
         if !valid {
             return Ok(found);
         }
-        let (to, from): (fn(f64) -> f64, fn(f64) -> f64) = if self.log {
-            (f64::ln, f64::exp)
+        let log = self.log;
+        let from = |t: f64| if log { t.exp() } else { t };
+        let (mut lo, mut hi) = if log {
+            (self.lo.ln(), self.hi.ln())
         } else {
-            (|x| x, |x| x)
+            (self.lo, self.hi)
         };
-        let (mut lo, mut hi) = (to(self.lo), to(self.hi));
         for _ in 0..self.steps {
             let mid = 0.5 * (lo + hi);
             let value = from(mid);
@@ -154,6 +158,76 @@ pub fn acceptance(
         }
     })?;
     Ok(run_stats(&out).acceptance.unwrap_or(f64::NAN))
+}
+
+/// Per-scene results of [`match_acceptance`], in the order of the scenes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Calibrations(pub Vec<(String, Calibrated)>);
+
+impl Calibrations {
+    /// The parameter found for `scene` (NaN for a scene not calibrated).
+    #[must_use]
+    pub fn value(&self, scene: &str) -> f64 {
+        self.0
+            .iter()
+            .find(|(s, _)| s == scene)
+            .map_or(f64::NAN, |(_, c)| c.value)
+    }
+
+    /// One row per scene: the target acceptance, the `parameter` found and the acceptance it
+    /// reached.
+    #[must_use]
+    pub fn table(&self, parameter: &str) -> Table {
+        let mut t = Table::new([
+            "scene".to_owned(),
+            "target acceptance".to_owned(),
+            parameter.to_owned(),
+            "its acceptance".to_owned(),
+        ]);
+        for (scene, c) in &self.0 {
+            t.push_row([
+                scene.clone(),
+                format!("{:.3}", c.target),
+                format!("{:.5}", c.value),
+                format!("{:.3}", c.achieved),
+            ]);
+        }
+        t
+    }
+}
+
+/// Per scene, the parameter of `family` whose acceptance matches `reference`'s: both
+/// rendered with `probe` (its budget, seed, threads and depth; the size is the scene's, the
+/// method replaced), the parameter found by `bisection`; [`Calibrated::target`] is the
+/// reference's acceptance.
+///
+/// # Errors
+/// [`ExperimentError::Render`] naming the scene of a failed render.
+pub fn match_acceptance(
+    cases: &[SceneCase],
+    probe: &RenderSettings,
+    reference: MethodSettings,
+    family: impl Fn(f64) -> MethodSettings,
+    bisection: Bisection,
+) -> Result<Calibrations, ExperimentError> {
+    let fits = cases
+        .iter()
+        .map(|case| {
+            let rate = |method: MethodSettings| {
+                let settings = RenderSettings {
+                    width: case.reference.width as u32,
+                    height: case.reference.height as u32,
+                    method,
+                    ..probe.clone()
+                };
+                acceptance(&case.name, &case.scene, &settings)
+            };
+            let target = rate(reference)?;
+            let fit = bisection.solve(target, |p| rate(family(p)))?;
+            Ok((case.name.clone(), fit))
+        })
+        .collect::<Result<_, ExperimentError>>()?;
+    Ok(Calibrations(fits))
 }
 
 #[cfg(test)]
@@ -210,6 +284,48 @@ mod tests {
         assert_eq!(count.get(), 0);
         let e = Bisection::linear(0.0, 1.0, 5).solve(0.5, |_| Err::<f64, _>("boom"));
         assert_eq!(e, Err("boom"));
+    }
+
+    #[test]
+    fn a_gaussian_step_matched_to_kelemens_acceptance() {
+        let case = SceneCase::cornell_box(8, 4).unwrap();
+        let probe = RenderSettings {
+            budget: Budget::SamplesPerPixel(4),
+            threads: 2,
+            ..RenderSettings::default()
+        };
+        let pss = |sigma: f64| {
+            let mut s = PssmltSettings::kelemen2002();
+            s.chain.chains = 16;
+            s.chain.bootstrap_samples = 1000;
+            if sigma > 0.0 {
+                s.chain.small_step = pss::SmallMutation::Gaussian { sigma };
+            }
+            MethodSettings::from(s)
+        };
+        let found =
+            match_acceptance(&[case], &probe, pss(0.0), pss, Bisection::log(1e-4, 0.5, 8)).unwrap();
+        let (scene, fit) = &found.0[0];
+        assert_eq!(scene, "cornell-box");
+        assert_eq!(found.value("cornell-box"), fit.value);
+        assert!(found.value("elsewhere").is_nan());
+        assert_eq!(fit.measurements, 8);
+        assert!((fit.achieved - fit.target).abs() < 0.1, "{fit:?}");
+        // Negative control: the range's ends are far from the target.
+        let end = |sigma| {
+            let case = SceneCase::cornell_box(8, 4).unwrap();
+            let settings = RenderSettings {
+                width: 8,
+                height: 8,
+                method: pss(sigma),
+                ..probe.clone()
+            };
+            acceptance("c", &case.scene, &settings).unwrap()
+        };
+        assert!((end(0.5) - fit.target).abs() > 0.1);
+        let t = found.table("sigma");
+        assert_eq!(t.headers()[2], "sigma");
+        assert_eq!(t.rows()[0][2], format!("{:.5}", fit.value));
     }
 
     #[test]

@@ -195,6 +195,44 @@ impl TableSpec {
         ])
     }
 
+    /// Errors and cost: `median [min, max]` of each error measure, then samples per second and
+    /// acceptance (when reported) as medians; add a ratio with [`TableSpec::with`].
+    /// [`TableSpec::standard`] is this for relMSE, MSE, rRMSE and MAD with the relMSE ratio.
+    #[must_use]
+    pub fn errors(measures: impl IntoIterator<Item = Measure>) -> Self {
+        let mut spec = Self::new(measures.into_iter().map(Column::range));
+        spec.columns.push(Column::median(Measure::SamplesPerSecond));
+        spec.columns
+            .push(Column::median(Measure::Acceptance).if_reported());
+        spec
+    }
+
+    /// Appends a column.
+    #[must_use]
+    pub fn with(mut self, column: Column) -> Self {
+        self.columns.push(column);
+        self
+    }
+
+    /// Acceptance per kernel stage (for delayed rejection and other multi-stage kernels):
+    /// overall acceptance, stage 1 acceptance, the share of steps that tried stage 2, stage 2
+    /// acceptance, the stage-2 share of accepted moves and candidates per step, all medians
+    /// over seeds; titled `acceptance per stage`, with a note on what stage 2 and the
+    /// candidate count mean.
+    #[must_use]
+    pub fn acceptance_by_stage() -> Self {
+        Self::new([
+            Column::median(Measure::Acceptance),
+            Column::median(Measure::StageAcceptance(0)),
+            Column::median(Measure::StageTried(1)),
+            Column::median(Measure::StageAcceptance(1)),
+            Column::median(Measure::SecondStageShare),
+            Column::median(Measure::CandidatesPerStep),
+        ])
+        .titled("acceptance per stage")
+        .with_note("stage 2 runs only after a rejected first stage; candidates per step count each stage's candidate once, not a kernel's extra evaluations (Green-Mira's ghost path at each second stage).")
+    }
+
     /// Sets the title.
     #[must_use]
     pub fn titled(mut self, title: impl Into<String>) -> Self {
@@ -367,6 +405,26 @@ mod tests {
     }
 
     #[test]
+    fn errors_then_chosen_ratios() {
+        let spec =
+            TableSpec::errors([Measure::Mse, Measure::Mad]).with(Column::ratio(Measure::Mse));
+        assert_eq!(
+            spec.headings(),
+            [
+                "method",
+                "MSE median [min, max]",
+                "MAD median [min, max]",
+                "samples/s",
+                "acceptance",
+                "MSE / baseline"
+            ]
+        );
+        let std = TableSpec::errors([Measure::RelMse, Measure::Mse, Measure::RRmse, Measure::Mad])
+            .with(Column::ratio(Measure::RelMse));
+        assert_eq!(std, TableSpec::standard());
+    }
+
+    #[test]
     fn ratio_columns_need_baselines_and_if_reported_needs_a_value() {
         let mut r = results();
         r.baselines.clear();
@@ -377,6 +435,34 @@ mod tests {
         ]);
         assert_eq!(r.table("s", &spec).headers(), ["method", "b"]);
         assert_eq!(r.table("s", &spec).rows()[0][1], "-");
+    }
+
+    #[test]
+    fn acceptance_by_stage_reads_the_counts() {
+        let mut r = results();
+        let mut counts = mcmc_core::stats::AcceptanceStats {
+            steps: 10,
+            ..Default::default()
+        };
+        counts.stage_tried = [10, 4];
+        counts.stage_accepted = [6, 1];
+        counts.proposed[0] = 10;
+        counts.accepted[0] = 7;
+        for rec in r.records.iter_mut().filter(|x| x.method == "new, better") {
+            rec.stats.acceptance_counts = Some(counts);
+        }
+        let t = r.table("s", &TableSpec::acceptance_by_stage());
+        assert_eq!(t.headers()[3], "stage 2 tried (share of steps)");
+        assert_eq!(
+            t.rows()[1][2..],
+            ["0.600", "0.400", "0.250", "0.143", "1.40"]
+        );
+        // Negative control: the one-stage baseline reports no stage statistics at all.
+        assert!(
+            t.rows()[0][2..].iter().all(|c| c == "-"),
+            "{:?}",
+            t.rows()[0]
+        );
     }
 
     #[test]

@@ -80,7 +80,7 @@ mod stats;
 mod table;
 mod toy_study;
 
-pub use calibrate::{Bisection, Calibrated};
+pub use calibrate::{Bisection, Calibrated, Calibrations};
 pub use columns::{Column, TableSpec};
 pub use error::ExperimentError;
 pub use harness::Experiment;

@@ -28,6 +28,7 @@ const COLOURS: [[f32; 3]; 5] = [
     [0.8, 0.5, 0.0],
     [0.5, 0.1, 0.6],
 ];
+const COLOUR_NAMES: [&str; 5] = ["red", "blue", "green", "orange", "purple"];
 const GREY: [f32; 3] = [0.6, 0.6, 0.6];
 
 /// One kernel's chains: chain 0's first coordinate over its first steps, the IAT of the first
@@ -170,6 +171,38 @@ impl<T: ToyTarget> ToyStudy<T> {
             ]);
         }
         t
+    }
+
+    /// Writes the panels as `<dir>/<prefix>_trace.png` and `<dir>/<prefix>_hist.png` (the
+    /// histogram with `bins` bins) and returns the study's markdown: a `## title` heading,
+    /// [`ToyStudy::table`] and a caption naming each kernel's colour and the files.
+    ///
+    /// # Errors
+    /// [`ExperimentError::Image`] naming a file that cannot be written.
+    pub fn write(
+        &self,
+        dir: &std::path::Path,
+        prefix: &str,
+        title: &str,
+        bins: usize,
+    ) -> Result<String, ExperimentError> {
+        let (trace, hist) = (format!("{prefix}_trace.png"), format!("{prefix}_hist.png"));
+        render::image_io::write_png(dir.join(&trace), &self.trace_image(), 0.0)?;
+        render::image_io::write_png(dir.join(&hist), &self.histogram_image(bins), 0.0)?;
+        let kernels: Vec<String> = (self.runs.iter().enumerate())
+            .map(|(i, r)| format!("{} ({})", r.name, COLOUR_NAMES[i % COLOUR_NAMES.len()]))
+            .collect();
+        let (lo, hi) = self.range();
+        let (chains, steps) = (self.chains, self.steps);
+        let states = steps.min(HISTOGRAM_STATES);
+        Ok(format!(
+            "\n## {title}\n\n{} chains x {steps} steps per kernel, from exact starts.\n\n{}\nPanels top to bottom: {}. `{trace}`: x (the first coordinate) over the first {} steps of chain 0 (grey: x = 0). `{hist}`: histogram of the first {states} states of chain 0 on [{lo}, {hi}]{}.\n",
+            chains,
+            self.table().to_markdown(),
+            kernels.join(", "),
+            steps.min(TRACE_STEPS),
+            if self.target.dim() == 1 { " with the exact density in grey" } else { "" },
+        ))
     }
 
     /// The range of the first coordinate the panels show: the target's bounding box.
@@ -349,5 +382,25 @@ mod tests {
         };
         assert!(has(&trace, 1, COLOURS[1]) && !has(&trace, 0, COLOURS[1]));
         assert!(has(&hist, 0, GREY), "the exact density");
+    }
+
+    #[test]
+    fn write_saves_both_panels_and_captions_them() {
+        let dir = std::env::temp_dir().join(format!("experiments-toy-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let md = study().write(&dir, "toy", "Toy", 110).unwrap();
+        assert!(dir.join("toy_trace.png").is_file() && dir.join("toy_hist.png").is_file());
+        assert!(md.starts_with("\n## Toy\n\n4 chains x 4000 steps"), "{md}");
+        assert!(
+            md.contains("MH 1 (red), DR (blue)") && md.contains("on [-0.1, 1]"),
+            "{md}"
+        );
+        assert!(md.contains("| DR |"), "{md}");
+        // Negative control: an unwritable directory is an error naming the file.
+        let e = study()
+            .write(&dir.join("missing/deeper"), "toy", "Toy", 10)
+            .unwrap_err();
+        assert!(e.to_string().contains("toy_trace.png"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
