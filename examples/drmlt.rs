@@ -16,9 +16,9 @@
 //!
 //! Changes from before the harness: acceptance per stage comes from the timed renders
 //! (`--stats-only` is the old separate run: 16 mpp, seed 7, DR only) and counts candidates per
-//! step (not Green-Mira's ghost); samples/s replaces Mmut/s; PSSMLT/G's sigma is in the
-//! calibration table, not its name; every seed's stage map is saved; the toy comes last; the
-//! shared flags, `--quick` being 16 x 16, 8 mpp, 2 seeds, cornell and cornell-glass.
+//! step (not Green-Mira's ghost); samples/s replaces Mmut/s; `results.csv` has the harness's
+//! columns; PSSMLT/G's sigma is in the calibration table, not its name; every seed's stage map
+//! is saved; the toy comes last; `--quick`: 16 x 16, 8 mpp, 2 seeds, cornell, cornell-glass.
 //!
 //! `cargo run --release --example drmlt -- [--time 4] [--seeds 5] [--size 64] [--out DIR]
 //! [--no-toy] [--no-scenes] [--stats-only] [--quick] [scene ...]`

@@ -20,8 +20,9 @@
 //! run directory (every seed's image, `run.json`, `report.html`; each seed is one
 //! error-vs-time sample). docs/methods/mala.md reports a run.
 //!
-//! Changes from the example before the harness: the table shows samples/s (was kmut/s); the
-//! shared flags (`--seeds`, `--size`, `--threads`, `--first-seed`, `--no-report`, ...), and
+//! Changes from the example before the harness: the table shows samples/s (was kmut/s) and
+//! `results.csv` has the harness's columns (a superset); `results.md` names the regime,
+//! commit and machine load; the shared flags (`--seeds`, `--size`, `--threads`, `--first-seed`, `--no-report`, ...), and
 //! `--quick` (caustic-pool at 16 x 16, 8 mutations per pixel, 2 seeds).
 //!
 //! `cargo run --release --example langevin -- [--time 3 | --spp N] [--seeds 5] [--size 64]
