@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
+use render::image::Image;
 use render::metrics::Metrics;
 use render::session::RenderOutput;
 
@@ -15,7 +16,7 @@ use crate::record::RunRecord;
 use crate::report::{current_commit, ConvergencePoint};
 use crate::results::Results;
 use crate::rundir::{scene_manifest, RunDirectory};
-use crate::scene::SceneCase;
+use crate::scene::{load_bundled, SceneCase};
 use crate::stats::run_stats;
 use crate::ExperimentError;
 
@@ -23,6 +24,8 @@ use crate::ExperimentError;
 type SceneParameters<'a> = dyn Fn(&Results, &str) -> Vec<(String, String)> + 'a;
 /// Sees every final render (its record, its output and the scene's run directory).
 type Inspect<'a> = dyn FnMut(&RunRecord, &RenderOutput, &Path) + 'a;
+/// Takes an extra image (a stage map, say) from a final render's output.
+type ExtraImage<'a> = dyn Fn(&RenderOutput) -> Option<Image> + 'a;
 
 /// A comparison of methods: build it from a [`Plan`], add methods, [`Experiment::run`] it.
 ///
@@ -38,6 +41,7 @@ pub struct Experiment<'a> {
     parameters: Vec<(String, String)>,
     scene_parameters: Option<Box<SceneParameters<'a>>>,
     inspect: Option<Box<Inspect<'a>>>,
+    extra_images: Vec<(String, Box<ExtraImage<'a>>)>,
 }
 
 impl<'a> Experiment<'a> {
@@ -53,6 +57,7 @@ impl<'a> Experiment<'a> {
             parameters: Vec::new(),
             scene_parameters: None,
             inspect: None,
+            extra_images: Vec::new(),
         }
     }
 
@@ -112,6 +117,21 @@ impl<'a> Experiment<'a> {
         self
     }
 
+    /// Saves an extra image of every final render that has one: `f` takes it from the
+    /// render's output (e.g. `|out| out.stage_map.clone()`, delayed rejection's stage map),
+    /// and the harness writes it next to the method's image as `<slug>_<name>_seed<seed>.exr`
+    /// (the first seed also as `<slug>_<name>.exr` and `.png`). `name` is a file stem of ASCII
+    /// letters, digits, `-` and `_`.
+    #[must_use]
+    pub fn extra_image(
+        mut self,
+        name: impl Into<String>,
+        f: impl Fn(&RenderOutput) -> Option<Image> + 'a,
+    ) -> Self {
+        self.extra_images.push((name.into(), Box::new(f)));
+        self
+    }
+
     /// Runs on these scenes instead of loading the plan's bundled scenes (each reference must
     /// be `plan.size` square).
     #[must_use]
@@ -149,6 +169,7 @@ impl<'a> Experiment<'a> {
                 let mut slot: Vec<RunRecord> = Vec::new();
                 for method in &self.methods {
                     let (record, output) = self.run_one(case, dir, method, seed, &slot)?;
+                    self.write_extra_images(dir, method, seed, &output)?;
                     if let Some(f) = self.inspect.as_mut() {
                         f(&record, &output, dir.path());
                     }
@@ -203,10 +224,51 @@ impl<'a> Experiment<'a> {
                 ));
             }
         }
+        for (i, (name, _)) in self.extra_images.iter().enumerate() {
+            let safe = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '_';
+            if name.is_empty() || !name.chars().all(safe) {
+                return invalid(format!("extra image name {name:?} is not a file stem"));
+            }
+            if self.extra_images[..i].iter().any(|(n, _)| n == name) {
+                return invalid(format!("extra image {name:?} appears twice"));
+            }
+            let clash = self.methods.iter().find_map(|m| {
+                let stem = format!("{}_{name}", m.slug());
+                self.methods
+                    .iter()
+                    .find(|o| o.slug() == stem)
+                    .map(|o| (m, o))
+            });
+            if let Some((m, o)) = clash {
+                return invalid(format!(
+                    "extra image {name:?} of {:?} would overwrite the images of {:?}",
+                    m.name(),
+                    o.name()
+                ));
+            }
+        }
         let known = |b: &str| self.methods.iter().any(|m| m.name() == b);
         for b in self.baselines().values().chain(self.baseline.as_ref()) {
             if !known(b) {
                 return invalid(format!("baseline {b:?} is not a method of the experiment"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the extra images of one final render ([`Experiment::extra_image`]).
+    fn write_extra_images(
+        &self,
+        dir: &RunDirectory,
+        method: &Method,
+        seed: u64,
+        output: &RenderOutput,
+    ) -> Result<(), ExperimentError> {
+        let first = self.plan.seeds.first() == Some(&seed);
+        for (name, f) in &self.extra_images {
+            if let Some(image) = f(output) {
+                let stem = format!("{}_{name}", method.slug());
+                dir.write_seed_image(&stem, seed, &image, first)?;
             }
         }
         Ok(())
@@ -228,18 +290,7 @@ impl<'a> Experiment<'a> {
         let size = self.plan.size as usize;
         let cases = match self.cases.take() {
             Some(cases) => cases,
-            None => self
-                .plan
-                .scenes
-                .iter()
-                .filter_map(|name| match SceneCase::bundled(name, self.plan.size) {
-                    Ok(case) => Some(case),
-                    Err(e) => {
-                        eprintln!("{e}; skipped");
-                        None
-                    }
-                })
-                .collect(),
+            None => load_bundled(&self.plan.scenes, self.plan.size),
         };
         if cases.is_empty() {
             return Err(ExperimentError::Invalid("no scene could be loaded".into()));

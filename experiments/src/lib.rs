@@ -9,8 +9,10 @@
 //! | shared flags (`--quick`, `--time` / `--spp`, `--seeds`, `--size`, `--threads`, `--out`, `--no-report`, scenes) | [`CommonOptions`] (flatten it into your own `clap::Parser`), [`parse`], [`Defaults`], [`Quick`] → [`Plan`] |
 //! | a compared configuration | [`Method`]: a name and a [`render::session::RenderSettings`] template (or a closure of the [`RunContext`]) |
 //! | the comparison | [`Experiment`]: every seed × scene × method interleaved, under a [`Regime`], each render measured against the scene's reference ([`SceneCase`]) with the machine's [`LoadAverage`] |
-//! | per-run statistics | [`run_stats`] → [`RunStats`] (b, its standard error, acceptance, the large-step estimate, mutations) |
-//! | outputs | per scene a [`RunDirectory`] (images per seed, `run.json`, `report.html` via [`report`]); `results.md` ([`Results::markdown`], [`Table`]) and `results.csv` ([`Results::csv`]) |
+//! | per-run statistics | [`run_stats`] → [`RunStats`] (b, its standard error, acceptance, the large-step estimate, mutations, the acceptance counts per component and stage) |
+//! | outputs | per scene a [`RunDirectory`] (images per seed, extra images such as stage maps via [`Experiment::extra_image`], `run.json`, `report.html` via [`report`]); `results.md` ([`Results::markdown`], [`Table`]) and `results.csv` ([`Results::csv`]) |
+//! | other tables | [`TableSpec`] of [`Column`]s (which [`Measure`]s, ranges or medians, which measure the baseline ratio divides, step cost, acceptance per stage) → [`Results::table`], [`Results::write_with`] |
+//! | analyses before or beside the comparison | [`load_bundled`] scenes, [`calibrate`] (a parameter matched to a target acceptance by [`Bisection`]), [`ToyStudy`] (kernels on a toy target: acceptance, IAT, trace and histogram panels) |
 //! | plots | the report's convergence plot; [`plot::write_log_log_svg`] for an example's own |
 //!
 //! # How a paper example uses it
@@ -25,7 +27,8 @@
 //! 3. Run it: `Experiment::new(plan).methods(methods).baseline("...").run()?` renders, measures,
 //!    writes `<out>/<scene>/` with `run.json` and `report.html`, and returns [`Results`].
 //! 4. `results.write(&extra)` writes `results.md` (a table per scene: medians over seeds,
-//!    ratios to the baseline) with the example's own tables appended, and `results.csv`.
+//!    ratios to the baseline) with the example's own tables appended, and `results.csv`;
+//!    `results.write_with(&[TableSpec..], &extra)` writes chosen tables instead.
 //!
 //! # Example
 //!
@@ -61,6 +64,8 @@
 //! # Ok::<(), experiments::ExperimentError>(())
 //! ```
 
+pub mod calibrate;
+mod columns;
 mod error;
 mod harness;
 mod load;
@@ -76,7 +81,10 @@ mod rundir;
 mod scene;
 mod stats;
 mod table;
+mod toy_study;
 
+pub use calibrate::{Bisection, Calibrated, Calibrations};
+pub use columns::{Column, TableSpec};
 pub use error::ExperimentError;
 pub use harness::Experiment;
 pub use load::LoadAverage;
@@ -87,6 +95,7 @@ pub use record::{Measure, RunRecord};
 pub use regime::Regime;
 pub use results::Results;
 pub use rundir::{scene_manifest, RunDirectory};
-pub use scene::{bundled_scene_names, SceneCase, SCENES_DIR};
+pub use scene::{bundled_scene_names, load_bundled, SceneCase, SCENES_DIR};
 pub use stats::{run_stats, LargeStepStats, RunStats};
 pub use table::{median, median_range, ratio, Table};
+pub use toy_study::{ToyRun, ToyStudy};

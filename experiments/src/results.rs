@@ -125,6 +125,24 @@ impl Results {
     /// and [`Results::scene_table`] per scene.
     #[must_use]
     pub fn markdown(&self) -> String {
+        let mut md = self.markdown_header();
+        let _ = writeln!(
+            md,
+            "\nErrors against each scene's reference, median [min, max] over the seeds; samples/s and acceptance are medians; the ratio divides the relMSE medians."
+        );
+        for scene in &self.scenes {
+            let _ = write!(
+                md,
+                "\n### {scene}\n\n{}",
+                self.scene_table(scene).to_markdown()
+            );
+        }
+        md.push_str(&self.markdown_footer());
+        md
+    }
+
+    /// The title line, the run's description and the shared parameters of `results.md`.
+    pub(crate) fn markdown_header(&self) -> String {
         let p = &self.plan;
         let mut md = format!(
             "# {}\n\n{}, seeds {:?}, {}x{} pixels, {} render thread(s){}; runs interleaved (for seed, for scene, for method). Commit {}.\n",
@@ -145,29 +163,21 @@ impl Results {
                 .collect();
             let _ = writeln!(md, "\n{}.", list.join("; "));
         }
-        let _ = writeln!(
-            md,
-            "\nErrors against each scene's reference, median [min, max] over the seeds; samples/s and acceptance are medians; the ratio divides the relMSE medians."
-        );
-        for scene in &self.scenes {
-            let _ = write!(
-                md,
-                "\n### {scene}\n\n{}",
-                self.scene_table(scene).to_markdown()
-            );
-        }
+        md
+    }
+
+    /// The machine-load and wall-time line that ends `results.md`'s tables.
+    pub(crate) fn markdown_footer(&self) -> String {
         let loads: Vec<f64> = self.records.iter().map(|r| Measure::Load.of(r)).collect();
         let (l, l0, l1) = render::metrics::median_min_max(&loads)
             .filter(|s| !s.0.is_nan())
             .unwrap_or((f64::NAN, f64::NAN, f64::NAN));
-        let _ = writeln!(
-            md,
-            "\nMachine load (1, 5, 15 min) before: {}; after: {}; 1-minute load before each render: median {l:.2} [min {l0:.2}, max {l1:.2}]. Wall time {:.0} s.",
+        format!(
+            "\nMachine load (1, 5, 15 min) before: {}; after: {}; 1-minute load before each render: median {l:.2} [min {l0:.2}, max {l1:.2}]. Wall time {:.0} s.\n",
             describe(self.load_before),
             describe(self.load_after),
             self.wall_seconds
-        );
-        md
+        )
     }
 
     /// `results.csv`: one row per run with its errors, cost, statistics and load.
@@ -216,9 +226,18 @@ impl Results {
     /// # Errors
     /// [`ExperimentError::Io`] naming the file that cannot be written.
     pub fn write(&self, extra_markdown: &str) -> Result<PathBuf, ExperimentError> {
+        self.write_markdown(self.markdown(), extra_markdown)
+    }
+
+    /// Writes `md` followed by `extra_markdown` as `results.md`, and `results.csv`; prints
+    /// the markdown and returns its path.
+    pub(crate) fn write_markdown(
+        &self,
+        mut md: String,
+        extra_markdown: &str,
+    ) -> Result<PathBuf, ExperimentError> {
         let out = &self.plan.out;
         std::fs::create_dir_all(out).map_err(ExperimentError::io(out))?;
-        let mut md = self.markdown();
         if !extra_markdown.is_empty() {
             md.push('\n');
             md.push_str(extra_markdown);
@@ -243,7 +262,7 @@ fn quote(field: &str) -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use render::metrics::Metrics;
 
     use super::*;
@@ -275,7 +294,8 @@ mod tests {
         }
     }
 
-    fn results() -> Results {
+    /// Two methods, two seeds, one scene; `base` is every method's baseline.
+    pub(crate) fn results() -> Results {
         Results {
             plan: Plan::from_defaults(&Defaults::new("t", Regime::EqualSamples(4))),
             methods: vec!["base".into(), "new, better".into()],

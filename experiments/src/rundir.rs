@@ -8,6 +8,7 @@
 //! | `reference.exr`, `reference.png` | the reference at the render size |
 //! | `<slug>_seed<seed>.exr` | every method's final image of every seed |
 //! | `<slug>.exr`, `<slug>.png` | the first seed's image, for a quick look |
+//! | `<slug>_<name>_seed<seed>.exr`, `<slug>_<name>.exr`/`.png` | extra images of a run ([`crate::Experiment::extra_image`], e.g. `stage2`), not listed in `run.json` |
 //! | `run.json`, `report.html` | the manifest and the self-contained report |
 
 use std::collections::BTreeMap;

@@ -100,6 +100,24 @@ impl SceneCase {
     }
 }
 
+/// The bundled scenes `names` at `size x size` ([`SceneCase::bundled`]), in order; a scene
+/// that cannot be loaded is skipped with a message on stderr (what [`crate::Experiment`] does
+/// with the plan's scenes). For an example that works on the scenes before the comparison
+/// (a per-scene calibration, say) and then passes them to [`crate::Experiment::scenes`].
+#[must_use]
+pub fn load_bundled(names: &[String], size: u32) -> Vec<SceneCase> {
+    names
+        .iter()
+        .filter_map(|name| match SceneCase::bundled(name, size) {
+            Ok(case) => Some(case),
+            Err(e) => {
+                eprintln!("{e}; skipped");
+                None
+            }
+        })
+        .collect()
+}
+
 /// The names of the bundled scenes (`scenes/*.gltf`), sorted; empty when the directory is
 /// missing (not run from the repository root).
 #[must_use]
@@ -135,5 +153,6 @@ mod tests {
     fn missing_bundled_scene_names_the_file() {
         let e = SceneCase::bundled("no-such-scene", 16).unwrap_err();
         assert!(e.to_string().contains("no-such-scene"), "{e}");
+        assert!(load_bundled(&["no-such-scene".into()], 16).is_empty());
     }
 }

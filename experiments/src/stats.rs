@@ -1,6 +1,7 @@
 //! Per-run statistics of the MCMC methods (normalisation, acceptance, the large-step estimate)
 //! and [`run_stats`], which takes them from a render's typed statistics.
 
+use mcmc_core::stats::AcceptanceStats;
 use render::session::RenderOutput;
 
 /// What one MCMC render reports about itself; every field is `None` where the method does not
@@ -17,6 +18,10 @@ pub struct RunStats {
     pub mutations: Option<u64>,
     /// Automatic large-step control's estimate (Zsolnai & Szirmay-Kalos 2013), when it ran.
     pub large_step: Option<LargeStepStats>,
+    /// The acceptance counts pooled over chains, per mixture component and per
+    /// delayed-rejection stage (`render::McmcStats::acceptance`): what the per-component and
+    /// per-stage [`crate::Measure`]s read. `None` without chains or mutations.
+    pub acceptance_counts: Option<AcceptanceStats>,
 }
 
 /// The estimate of automatic large-step control (Zsolnai & Szirmay-Kalos 2013, eq. 4-6).
@@ -78,6 +83,7 @@ pub fn run_stats(output: &RenderOutput) -> RunStats {
             eta_0: e.eta_0,
             p_large: e.large_step_probability,
         }),
+        acceptance_counts: (m.mutations > 0).then_some(m.acceptance),
     }
 }
 
@@ -123,6 +129,7 @@ mod tests {
         assert_eq!(s.b_standard_error, Some(1.5e-3));
         assert_eq!(s.acceptance, Some(0.25));
         assert_eq!(s.mutations, Some(4));
+        assert_eq!(s.acceptance_counts, Some(acceptance));
         assert_eq!(
             s.large_step,
             Some(LargeStepStats {
@@ -139,5 +146,15 @@ mod tests {
         // The note says 0.9; without typed statistics nothing is reported (negative control
         // of reading notes).
         assert_eq!(run_stats(&output(None)), RunStats::default());
+    }
+
+    #[test]
+    fn a_run_without_mutations_has_no_acceptance_counts() {
+        let m = McmcStats {
+            b: 0.5,
+            ..McmcStats::default()
+        };
+        let s = run_stats(&output(Some(m)));
+        assert_eq!((s.mutations, s.acceptance_counts), (Some(0), None));
     }
 }
