@@ -2,7 +2,7 @@
 //! explored by rank-1 lattices, prefixes re-traced and reconnected to the static suffix
 //! ([`crate::integrator::lqmc`]).
 
-use super::{IntegratorKind, Method, RenderOutput, RenderSettings, Run};
+use super::{IntegratorKind, LqmcStats, Method, RenderOutput, RenderSettings, Run};
 use crate::error::RenderError;
 use crate::integrator::lqmc::{render_lqmc, LqmcParams};
 use crate::integrator::pt::ROULETTE_DEPTH;
@@ -70,6 +70,14 @@ impl Method for LqmcSettings {
             dropped_nonfinite: out.dropped_nonfinite,
             cancelled: out.cancelled,
             notes,
+            lqmc: Some(LqmcStats {
+                seeds: out.seeds,
+                progressions: out.progressions,
+                explored: out.explored,
+                direct: out.direct,
+                members: out.members,
+                rejected: out.rejected,
+            }),
             ..RenderOutput::new(out.image, run.start.elapsed())
         })
     }
