@@ -12,6 +12,11 @@
 //! | per-run statistics | [`run_stats`] → [`RunStats`] (b, its standard error, acceptance, the large-step estimate, mutations) |
 //! | outputs | per scene a [`RunDirectory`] (images per seed, `run.json`, `report.html` via [`report`]); `results.md` ([`Results::markdown`], [`Table`]) and `results.csv` ([`Results::csv`]) |
 //! | plots | the report's convergence plot; [`plot::write_log_log_svg`] for an example's own |
+//! | several budgets in one run | [`Ladder`] (an [`Experiment`] per rung) → [`LadderResults`]: error-vs-time curves, a table per scene, one CSV |
+//! | an example's own per-run values | [`RunValues`] (filled in [`Experiment::inspect`], looked up and summarised like [`Results`]' measures) |
+//! | over seeds | [`Results::images`] (every seed's image read back), [`TemporalVariance`] ([`Results::temporal_variance`]), [`Results::compare`] → [`Comparison`] (medians and seed-by-seed wins) |
+//! | per-pixel maps | [`maps`]: upscaled false-colour PNGs of any map of a run ([`maps::write_map_png`], named by [`maps::map_path`]) and relative-error maps ([`Results::write_error_maps`]) |
+//! | sampling-pattern figures | [`scatter`]: point sets as dots in panels, [`scatter::cells_hit`] |
 //!
 //! # How a paper example uses it
 //!
@@ -61,9 +66,12 @@
 //! # Ok::<(), experiments::ExperimentError>(())
 //! ```
 
+mod compare;
 mod error;
 mod harness;
+mod ladder;
 mod load;
+pub mod maps;
 mod method;
 mod options;
 mod plan;
@@ -73,12 +81,19 @@ mod regime;
 pub mod report;
 mod results;
 mod rundir;
+pub mod scatter;
 mod scene;
 mod stats;
 mod table;
+mod temporal;
+#[cfg(test)]
+mod test_support;
+mod values;
 
+pub use compare::Comparison;
 pub use error::ExperimentError;
 pub use harness::Experiment;
+pub use ladder::{Ladder, LadderDefaults, LadderOptions, LadderResults};
 pub use load::LoadAverage;
 pub use method::{Method, RunContext};
 pub use options::{parse, try_parse_from, CommonOptions};
@@ -90,3 +105,5 @@ pub use rundir::{scene_manifest, RunDirectory};
 pub use scene::{bundled_scene_names, SceneCase, SCENES_DIR};
 pub use stats::{run_stats, LargeStepStats, RunStats};
 pub use table::{median, median_range, ratio, Table};
+pub use temporal::TemporalVariance;
+pub use values::RunValues;

@@ -145,6 +145,18 @@ pub struct LqmcStats {
     pub rejected: u64,
 }
 
+impl std::fmt::Display for LqmcStats {
+    /// `N seeds, N progressions, N contributions explored (N members in class, N rejected), N
+    /// splatted directly`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} seeds, {} progressions, {} contributions explored ({} members in class, {} rejected), {} splatted directly",
+            self.seeds, self.progressions, self.explored, self.members, self.rejected, self.direct
+        )
+    }
+}
+
 impl McmcStats {
     /// The acceptance rate over all steps.
     #[must_use]
