@@ -89,7 +89,7 @@ fn main() -> Res<()> {
 /// Per scene the temporal-stability table (8 x 8 blocks) and LQMC's counters.
 fn temporal(results: &Results, lqmc: &RunValues<LqmcStats>, first: u64) -> Res<String> {
     let seeds = results.plan.seeds.len();
-    let mut md = format!("## Temporal stability ({seeds} seeds as frames)\n");
+    let mut md = format!("\n## Temporal stability ({seeds} seeds as frames)\n");
     for scene in &results.scenes {
         let table = results.temporal_table(scene, 8)?.to_markdown();
         md += &format!("\n### {scene}\n\n{table}");

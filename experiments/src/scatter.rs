@@ -202,12 +202,12 @@ pub fn torus_walk(start: [f64; 2], radius: f64, n: usize, seed: u64) -> Vec<[f64
 }
 
 /// Per set the cells of a `k x k` grid over its window that it hits ([`cells_hit`]): columns
-/// `point set` and `cells of a kxk grid hit (of k^2)`.
+/// `point set` and `cells hit of the kxk grid (of k^2)`.
 #[must_use]
 pub fn coverage_table(sets: &[PointSet], k: usize) -> Table {
     let mut table = Table::new([
         "point set".to_owned(),
-        format!("cells of a {k}x{k} grid hit (of {})", k * k),
+        format!("cells hit of the {k}x{k} grid (of {})", k * k),
     ]);
     for set in sets {
         let hit = cells_hit(&set.points, set.window, k);
@@ -286,7 +286,7 @@ mod tests {
             PointSet::new("outside", vec![[0.1, 0.1]], [0.0; 3], tile),
         ];
         let t = coverage_table(&sets, 2);
-        assert_eq!(t.headers()[1], "cells of a 2x2 grid hit (of 4)");
+        assert_eq!(t.headers()[1], "cells hit of the 2x2 grid (of 4)");
         assert_eq!(t.rows()[0], ["inside", "2"]);
         assert_eq!(t.rows()[1], ["outside", "0"]);
     }

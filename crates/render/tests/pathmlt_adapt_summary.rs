@@ -38,11 +38,20 @@ fn run(method: PathMltSettings) -> Result<RenderOutput, render::RenderError> {
 
 #[test]
 fn adaptive_runs_report_the_sigma_map_and_a_typed_summary() {
-    let out = run(PathMltSettings::otsu2018(PerturbationKind::Lens, PathAdapt::Grid)).unwrap();
+    let out = run(PathMltSettings::otsu2018(
+        PerturbationKind::Lens,
+        PathAdapt::Grid,
+    ))
+    .unwrap();
     let map = out.sigma_map.as_ref().expect("a sigma map");
     assert_eq!(map.len(), 16 * 12);
     assert!(map.iter().all(|s| s.is_finite() && *s > 0.0));
-    let summary = out.mcmc.as_ref().unwrap().regional_adapt.expect("a summary");
+    let summary = out
+        .mcmc
+        .as_ref()
+        .unwrap()
+        .regional_adapt
+        .expect("a summary");
     assert!(summary.synchronised && summary.rounds > 0);
     assert_eq!((summary.adapt, summary.regions), (PathAdapt::Grid, 400));
     assert!(summary.updated > 0 && summary.updated <= summary.regions);
@@ -50,7 +59,11 @@ fn adaptive_runs_report_the_sigma_map_and_a_typed_summary() {
     assert_eq!(summary.refinements, 0, "grids do not refine");
     assert!(out.notes.contains(&summary.note()), "{:?}", out.notes);
     // Negative control: FIXED learns nothing.
-    let fixed = run(PathMltSettings::otsu2018(PerturbationKind::Lens, PathAdapt::Fixed)).unwrap();
+    let fixed = run(PathMltSettings::otsu2018(
+        PerturbationKind::Lens,
+        PathAdapt::Fixed,
+    ))
+    .unwrap();
     assert!(fixed.sigma_map.is_none());
     assert!(fixed.mcmc.unwrap().regional_adapt.is_none());
 }
