@@ -137,7 +137,7 @@ pub fn write_run_map(
     factor: usize,
 ) -> Result<PathBuf, ExperimentError> {
     let path = map_path(dir, record, suffix);
-    if width == 0 || values.is_empty() || values.len() % width != 0 {
+    if width == 0 || values.is_empty() || !values.len().is_multiple_of(width) {
         return Err(ExperimentError::Invalid(format!(
             "{}: {} values are no rows of {width}",
             path.display(),

@@ -136,11 +136,8 @@ impl TemporalVariance {
             }
         }
         let pixel_variance = total / (w * h) as f64;
-        let (bw, bh) = if block == 0 {
-            (0, 0)
-        } else {
-            (w / block, h / block)
-        };
+        let (bw, bh) = (w.checked_div(block), h.checked_div(block));
+        let (bw, bh) = (bw.unwrap_or(0), bh.unwrap_or(0));
         let block_ratio = if bw == 0 || bh == 0 || pixel_variance <= 0.0 {
             f64::NAN
         } else {

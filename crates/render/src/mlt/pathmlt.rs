@@ -356,6 +356,10 @@ pub fn render_adaptive(
     .map(|(out, _, _)| out)
 }
 
+/// What [`render_adaptive_with_params`] returns: the render, the learned `sigma_1` per pixel
+/// (row-major) and the adaptation's [`AdaptSummary`].
+pub type AdaptiveRender = (MltOutput, Option<Vec<f64>>, Option<AdaptSummary>);
+
 /// As [`render_adaptive`] with the given regional-adaptation `params` (used as given, e.g.
 /// [`adapt_params`] with `M_refine`, `M_split` scaled to an expected mutation count under a
 /// time budget), also returning the learned scale over the screen: `sigma_1` per pixel of the
@@ -375,7 +379,7 @@ pub fn render_adaptive_with_params(
     params: &RegionalAdaptParams,
     progress: &dyn Progress,
     cancel: &AtomicBool,
-) -> Result<(MltOutput, Option<Vec<f64>>, Option<AdaptSummary>), RenderError> {
+) -> Result<AdaptiveRender, RenderError> {
     let view = PathSpaceScene::new(scene)?;
     let Some(partition) = adapt_partition(&view, kind, adapt)? else {
         return render(scene, kind, max_depth, settings, progress, cancel)
