@@ -15,9 +15,13 @@
 //! samples/s; then this example's temporal stability: per-pixel luminance variance across the
 //! seeds' renders, the frames of a still animation, next to the mean MSE, and its 8 x 8-block
 //! ratio, 1 for uncorrelated noise, more for blotches; and LQMC's counters for the first seed)
-//! and `results.csv`. `--quick`: 0.25 s, 2 seeds, 16 x 16. Changed from the hand-written
-//! example: errors and samples/s are in the harness's table; the seeds' images live in the run
-//! directories (first seed's EXR and PNG beside them), the reference at the render size.
+//! and `results.csv`. `--quick`: 0.25 s, 2 seeds, 16 x 16.
+//!
+//! Changed from the hand-written example: relMSE, MAD and samples/s (wall clock of the render
+//! call) are in the harness's table, which comes first in `results.md`, then the toy, then the
+//! temporal table; `results.csv` has the harness's columns; the LQMC line comes from typed
+//! statistics (`RenderOutput::lqmc`); one seed is allowed (temporal columns `-`); the shared
+//! flags (`--spp`, `--threads`, `--first-seed`, `--no-report`, `--quick`) are new.
 //!
 //! `cargo run --release --example lqmc -- [--no-toy] [--no-scenes]` and the shared flags
 //! (`--time 2`, `--seeds 10`, `--size 64`, `--out target/lqmc`, `--quick`, scenes; `--help`).

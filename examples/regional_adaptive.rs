@@ -13,9 +13,9 @@
 //! FIXED, the learned sigma's pixel median, the paper's orderings, the first seed's adaptation
 //! summaries), `results.csv`, and the rRMSE-vs-time ladder (Fig. 10; glossy-diffuse, 1-60 s, 3
 //! seeds from 1000): `<out>/ladder/`, `ladder.csv`, `convergence.svg`. `--quick`: 0.5 s, 2
-//! seeds, 32 x 32, ladder 0.25, 0.5 s, 1 seed. Changed: Mmut/s and acceptance are in the
-//! harness's table; the ladder runs rung by rung (was seed by seed), with run directories and the
-//! harness's CSV (no sigma); its plot shows every seed; one line per ordering.
+//! seeds, 32 x 32, ladder 0.25, 0.5 s, 1 seed. Changed: rRMSE, relMSE, samples/s, acceptance are
+//! in the harness's table and CSVs (no sigma column); the ladder runs rung by rung (was seed by
+//! seed) with run directories; its plot shows every seed; one line per ordering.
 //!
 //! `cargo run --release --example regional_adaptive -- [--m-split N] [--ladder 1,4,15,60]
 //! [--ladder-seeds 3] [--ladder-scene glossy-diffuse]` and the shared flags (`--help`).
