@@ -98,6 +98,10 @@ impl Ladder {
 /// The ladder flags of an example with an error-vs-time ladder (flatten them into its
 /// `clap::Parser` beside [`crate::CommonOptions`]); absent flags take its [`LadderDefaults`].
 #[derive(Clone, Debug, Default, PartialEq, clap::Args)]
+#[command(
+    about = "A chainlight paper example: compares methods over seeds on the bundled scenes.",
+    long_about = None
+)]
 pub struct LadderOptions {
     /// Ladder budgets in seconds per render, comma-separated (default: the example's).
     #[arg(long, value_delimiter = ',', value_name = "SECONDS", value_parser = parse_seconds)]
@@ -400,6 +404,12 @@ mod tests {
         use clap::Parser as _;
         assert!(Args::try_parse_from(["t", "--ladder", "1,0"]).is_err());
         assert!(Args::try_parse_from(["t", "--ladder", "x"]).is_err());
+        // The help's about text is the examples', not this struct's documentation.
+        let help = Args::try_parse_from(["t", "--help"])
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(help.starts_with("A chainlight paper example"), "{help}");
     }
 
     #[test]
