@@ -14,6 +14,11 @@
 //! | other tables | [`TableSpec`] of [`Column`]s (which [`Measure`]s, ranges or medians, which measure the baseline ratio divides, step cost, acceptance per stage) → [`Results::table`], [`Results::write_with`] |
 //! | analyses before or beside the comparison | [`load_bundled`] scenes, [`calibrate`] (a parameter matched to a target acceptance by [`Bisection`]), [`ToyStudy`] (kernels on a toy target: acceptance, IAT, trace and histogram panels) |
 //! | plots | the report's convergence plot; [`plot::write_log_log_svg`] for an example's own |
+//! | several budgets in one run | [`Ladder`] (an [`Experiment`] per rung) → [`LadderResults`]: error-vs-time curves, a table per scene, one CSV |
+//! | an example's own per-run values | [`RunValues`] (filled in [`Experiment::inspect`], looked up and summarised like [`Results`]' measures) |
+//! | over seeds | [`Results::images`] (every seed's image read back), [`TemporalVariance`] ([`Results::temporal_variance`]), [`Results::compare`] → [`Comparison`] (medians and seed-by-seed wins) |
+//! | per-pixel maps | [`maps`]: upscaled false-colour PNGs of any map of a run ([`maps::write_map_png`], named by [`maps::map_path`]) and relative-error maps ([`Results::write_error_maps`]) |
+//! | sampling-pattern figures | [`scatter`]: point sets as dots in panels, [`scatter::cells_hit`] |
 //!
 //! # How a paper example uses it
 //!
@@ -66,9 +71,12 @@
 
 pub mod calibrate;
 mod columns;
+mod compare;
 mod error;
 mod harness;
+mod ladder;
 mod load;
+pub mod maps;
 mod method;
 mod options;
 mod plan;
@@ -78,6 +86,7 @@ mod regime;
 pub mod report;
 mod results;
 mod rundir;
+pub mod scatter;
 mod scene;
 mod stats;
 mod table;
@@ -85,8 +94,15 @@ mod toy_study;
 
 pub use calibrate::{Bisection, Calibrated, Calibrations};
 pub use columns::{Column, TableSpec};
+mod temporal;
+#[cfg(test)]
+mod test_support;
+mod values;
+
+pub use compare::Comparison;
 pub use error::ExperimentError;
 pub use harness::Experiment;
+pub use ladder::{Ladder, LadderDefaults, LadderOptions, LadderResults};
 pub use load::LoadAverage;
 pub use method::{Method, RunContext};
 pub use options::{parse, try_parse_from, CommonOptions};
@@ -98,4 +114,6 @@ pub use rundir::{scene_manifest, RunDirectory};
 pub use scene::{bundled_scene_names, load_bundled, SceneCase, SCENES_DIR};
 pub use stats::{run_stats, LargeStepStats, RunStats};
 pub use table::{median, median_range, ratio, Table};
+pub use temporal::TemporalVariance;
 pub use toy_study::{ToyRun, ToyStudy};
+pub use values::RunValues;

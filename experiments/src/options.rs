@@ -229,7 +229,7 @@ fn with_defaults(command: clap::Command, d: &Defaults) -> clap::Command {
 }
 
 /// Seconds in `(0, 86400]`.
-fn parse_seconds(text: &str) -> Result<f64, String> {
+pub(crate) fn parse_seconds(text: &str) -> Result<f64, String> {
     text.parse::<f64>()
         .ok()
         .filter(|t| *t > 0.0 && *t <= MAX_SECONDS)

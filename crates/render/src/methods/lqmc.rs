@@ -2,7 +2,7 @@
 //! explored by rank-1 lattices, prefixes re-traced and reconnected to the static suffix
 //! ([`crate::integrator::lqmc`]).
 
-use super::{IntegratorKind, Method, RenderOutput, RenderSettings, Run};
+use super::{IntegratorKind, LqmcStats, Method, RenderOutput, RenderSettings, Run};
 use crate::error::RenderError;
 use crate::integrator::lqmc::{render_lqmc, LqmcParams};
 use crate::integrator::pt::ROULETTE_DEPTH;
@@ -60,16 +60,22 @@ impl Method for LqmcSettings {
             roulette: Some(ROULETTE_DEPTH),
         };
         let out = render_lqmc(scene, &pt, &self.params, run.progress, run.cancel);
+        let stats = LqmcStats {
+            seeds: out.seeds,
+            progressions: out.progressions,
+            explored: out.explored,
+            direct: out.direct,
+            members: out.members,
+            rejected: out.rejected,
+        };
         let mut notes = scene.notes.clone();
-        notes.push(format!(
-            "lqmc: {} seeds, {} progressions, {} contributions explored ({} members in class, {} rejected), {} splatted directly",
-            out.seeds, out.progressions, out.explored, out.members, out.rejected, out.direct
-        ));
+        notes.push(format!("lqmc: {stats}"));
         Ok(RenderOutput {
             samples: out.seeds,
             dropped_nonfinite: out.dropped_nonfinite,
             cancelled: out.cancelled,
             notes,
+            lqmc: Some(stats),
             ..RenderOutput::new(out.image, run.start.elapsed())
         })
     }

@@ -48,7 +48,9 @@ pub use drmlt::DrmltSettings;
 pub use lqmc::LqmcSettings;
 pub use mala::MalaSettings;
 pub use mmlt::MmltSettings;
-pub use output::{mcmc_notes, mcmc_output, DirectPassStats, McmcStats, PhaseTimes, RenderOutput};
+pub use output::{
+    mcmc_notes, mcmc_output, DirectPassStats, LqmcStats, McmcStats, PhaseTimes, RenderOutput,
+};
 pub use pathmlt::PathMltSettings;
 pub use pssmlt::PssmltSettings;
 pub use pt::{PtSettings, QmcSettings};

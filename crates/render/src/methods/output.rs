@@ -1,5 +1,5 @@
-//! What a render returns: the image, counters, human-readable notes and, for the Markov chain
-//! methods, typed run statistics ([`McmcStats`]).
+//! What a render returns: the image, counters, human-readable notes and typed run statistics
+//! ([`McmcStats`] for the Markov chain methods, [`LqmcStats`] for LQMC).
 
 use std::time::Duration;
 
@@ -7,6 +7,7 @@ use mcmc_core::controller::LargeStepEstimate;
 use mcmc_core::stats::AcceptanceStats;
 
 use crate::image::Image;
+use crate::mlt::pathmlt::AdaptSummary;
 use crate::mlt::MltOutput;
 
 /// The result of a render.
@@ -32,6 +33,12 @@ pub struct RenderOutput {
     pub stage_map: Option<Image>,
     /// The Markov chain methods' run statistics (`None` for PT, QMC, BDPT and LQMC).
     pub mcmc: Option<McmcStats>,
+    /// Path-space MLT with regional adaptation: the learned `sigma_1` (radians) per pixel,
+    /// row-major (`render::mlt::pathmlt::render_adaptive_with_params`; `None` for FIXED, the
+    /// other methods, or if no synchronisation point was reached).
+    pub sigma_map: Option<Vec<f64>>,
+    /// LQMC's run statistics (`None` for the other methods).
+    pub lqmc: Option<LqmcStats>,
 }
 
 impl RenderOutput {
@@ -49,6 +56,8 @@ impl RenderOutput {
             strategy_images: Vec::new(),
             stage_map: None,
             mcmc: None,
+            sigma_map: None,
+            lqmc: None,
         }
     }
 }
@@ -114,6 +123,38 @@ pub struct McmcStats {
     pub found_nothing: bool,
     /// Wall-clock time per phase.
     pub times: PhaseTimes,
+    /// Path-space MLT with regional adaptation: what the adaptation did (`None` otherwise).
+    pub regional_adapt: Option<AdaptSummary>,
+}
+
+/// Typed statistics of an LQMC render (Tessari et al. 2020): the seed paths and what their
+/// lattice sets explored (`render::integrator::lqmc::LqmcOutput`'s counters).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LqmcStats {
+    /// Seed paths traced.
+    pub seeds: u64,
+    /// Progressions (samples per pixel) in the image.
+    pub progressions: u32,
+    /// Contributions explored with a lattice set.
+    pub explored: u64,
+    /// Contributions splatted unexplored.
+    pub direct: u64,
+    /// Lattice members in their seed's class (seeds included).
+    pub members: u64,
+    /// Lattice members rejected (left the class).
+    pub rejected: u64,
+}
+
+impl std::fmt::Display for LqmcStats {
+    /// `N seeds, N progressions, N contributions explored (N members in class, N rejected), N
+    /// splatted directly`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} seeds, {} progressions, {} contributions explored ({} members in class, {} rejected), {} splatted directly",
+            self.seeds, self.progressions, self.explored, self.members, self.rejected, self.direct
+        )
+    }
 }
 
 impl McmcStats {
@@ -144,6 +185,7 @@ impl McmcStats {
                 chains: out.chains_time,
                 ..PhaseTimes::default()
             },
+            regional_adapt: None,
         }
     }
 }

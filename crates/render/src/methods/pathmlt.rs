@@ -2,6 +2,7 @@
 //! perturbation mixed with the bidirectional mutation, with the perturbation's scale fixed or
 //! adapted per region (Otsu et al. 2018; [`crate::mlt::pathmlt`]).
 
+use pathspace::regional::RegionalAdaptParams;
 use pathspace::PerturbationKind;
 
 use super::{
@@ -9,7 +10,7 @@ use super::{
     Run, MAX_BOOTSTRAP_SAMPLES, MAX_CHAINS,
 };
 use crate::error::RenderError;
-use crate::mlt::pathmlt::{render_adaptive, PathAdapt, PATHMLT_SIGMA};
+use crate::mlt::pathmlt::{adapt_params, render_adaptive_with_params, PathAdapt, PATHMLT_SIGMA};
 use crate::mlt::{LargeStepMode, MltSettings};
 use crate::scene::Scene;
 
@@ -24,6 +25,14 @@ pub struct PathMltSettings {
     pub perturbation: PerturbationKind,
     /// How the perturbation's angular scale is adapted (default fixed).
     pub adapt: PathAdapt,
+    /// RA-QUADTREE: scale `M_refine` and `M_split` to this many mutations over all chains
+    /// (`RegionalAdaptParams::otsu2018_for_budget`), e.g. the count FIXED reached in the same
+    /// time. `None` (the preset): scaled to the mutation budget under equal samples, the
+    /// paper's `M_refine = 10^7`, `M_split = 5000` under a time budget
+    /// ([`crate::mlt::pathmlt::adapt_params`]).
+    pub refine_for_mutations: Option<u64>,
+    /// RA-QUADTREE: `M_split` instead of the scheduled one (`None`: the schedule's).
+    pub split_after_visits: Option<u64>,
 }
 
 impl Default for PathMltSettings {
@@ -45,6 +54,8 @@ impl PathMltSettings {
             bootstrap_samples: 100_000,
             perturbation,
             adapt,
+            refine_for_mutations: None,
+            split_after_visits: None,
         }
     }
 }
@@ -64,6 +75,9 @@ impl Method for PathMltSettings {
                 self.bootstrap_samples,
                 "1..=100000000",
             ));
+        }
+        if self.split_after_visits == Some(0) {
+            return Err(RenderError::setting("split-after-visits", 0, ">= 1"));
         }
         Ok(())
     }
@@ -85,12 +99,24 @@ impl Method for PathMltSettings {
             streams: 1,
             stage_map: false,
         };
-        let out = render_adaptive(
+        let mut params = adapt_params(self.adapt, &mlt_settings);
+        if self.adapt == PathAdapt::Quadtree {
+            if let Some(m) = self.refine_for_mutations {
+                let scaled = RegionalAdaptParams::otsu2018_for_budget(m);
+                params.split_after_visits = scaled.split_after_visits;
+                params.refine_every = scaled.refine_every;
+            }
+            if let Some(m) = self.split_after_visits {
+                params.split_after_visits = Some(m);
+            }
+        }
+        let (out, sigma_map, summary) = render_adaptive_with_params(
             scene,
             self.perturbation,
             self.adapt,
             common.max_depth,
             &mlt_settings,
+            &params,
             run.progress,
             run.cancel,
         )?;
@@ -109,6 +135,11 @@ impl Method for PathMltSettings {
                 ),
             }
         ));
-        Ok(mcmc_output(out, notes, run.start.elapsed()))
+        let mut output = mcmc_output(out, notes, run.start.elapsed());
+        if let Some(mcmc) = output.mcmc.as_mut() {
+            mcmc.regional_adapt = summary;
+        }
+        output.sigma_map = sigma_map;
+        Ok(output)
     }
 }

@@ -353,14 +353,19 @@ pub fn render_adaptive(
     render_adaptive_with_params(
         scene, kind, adapt, max_depth, settings, &params, progress, cancel,
     )
-    .map(|(out, _)| out)
+    .map(|(out, _, _)| out)
 }
+
+/// What [`render_adaptive_with_params`] returns: the render, the learned `sigma_1` per pixel
+/// (row-major) and the adaptation's [`AdaptSummary`].
+pub type AdaptiveRender = (MltOutput, Option<Vec<f64>>, Option<AdaptSummary>);
 
 /// As [`render_adaptive`] with the given regional-adaptation `params` (used as given, e.g.
 /// [`adapt_params`] with `M_refine`, `M_split` scaled to an expected mutation count under a
 /// time budget), also returning the learned scale over the screen: `sigma_1` per pixel of the
 /// `settings.width x settings.height` image (`RegionalSigmas::screen_sigma_map`, row-major;
-/// `None` for FIXED or if no synchronisation point was reached).
+/// `None` for FIXED or if no synchronisation point was reached), and the adaptation's
+/// [`AdaptSummary`] (`None` for FIXED; its [`AdaptSummary::note`] is the output's note).
 ///
 /// # Errors
 /// As [`render`], and for invalid `params`.
@@ -374,10 +379,11 @@ pub fn render_adaptive_with_params(
     params: &RegionalAdaptParams,
     progress: &dyn Progress,
     cancel: &AtomicBool,
-) -> Result<(MltOutput, Option<Vec<f64>>), RenderError> {
+) -> Result<AdaptiveRender, RenderError> {
     let view = PathSpaceScene::new(scene)?;
     let Some(partition) = adapt_partition(&view, kind, adapt)? else {
-        return render(scene, kind, max_depth, settings, progress, cancel).map(|out| (out, None));
+        return render(scene, kind, max_depth, settings, progress, cancel)
+            .map(|out| (out, None, None));
     };
     let sampler = independent_sampler(&view, max_depth)?;
     let bad = |e: pathspace::PathspaceError| RenderError::setting("adapt", e, "valid parameters");
@@ -401,47 +407,99 @@ pub fn render_adaptive_with_params(
         p.sigmas()
             .map(|s| s.get().screen_sigma_map(settings.width, settings.height))
     });
-    if let Some(pooled) = pooled {
-        out.notes.push(adapt_summary(adapt, &pooled));
+    let summary = pooled.map(|pooled| AdaptSummary::of(adapt, &pooled));
+    if let Some(summary) = &summary {
+        out.notes.push(summary.note());
     }
-    Ok((out, map))
+    Ok((out, map, summary))
 }
 
-/// One line on the learned scales: regions, refinements, and `sigma` over the regions that
-/// were updated at least once.
-fn adapt_summary(adapt: PathAdapt, pooled: &PooledRegionalStats<AdaptPartition<'_>>) -> String {
-    let Some(sigmas) = pooled.sigmas() else {
-        return format!("--adapt {}: no synchronisation point reached", adapt.name());
-    };
-    let mut updated: Vec<f64> = (0..pooled.num_regions())
-        .filter(|&k| pooled.region_stats(k).is_some_and(|r| r.adapt.updates > 1))
-        .map(|k| sigmas.get().sigmas_of_region(k)[0])
-        .collect();
-    updated.sort_by(f64::total_cmp);
-    let q = |f: f64| {
-        updated
-            .get(((updated.len() - 1) as f64 * f).round() as usize)
-            .copied()
-            .unwrap_or(f64::NAN)
-    };
-    if updated.is_empty() {
-        return format!(
-            "--adapt {}: {} regions, none updated in {} rounds (sigma stays {PATHMLT_SIGMA} rad)",
-            adapt.name(),
-            pooled.num_regions(),
-            pooled.rounds()
-        );
+/// What regional adaptation did in one render (Otsu et al. 2018, section 6): its regions,
+/// rounds, refinements and the learned `sigma_1` over the regions that were updated.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AdaptSummary {
+    /// The adaptation variant.
+    pub adapt: PathAdapt,
+    /// False if no synchronisation point was reached (nothing was learned).
+    pub synchronised: bool,
+    /// Regions of the final partition.
+    pub regions: usize,
+    /// Regions whose scale was updated more than once.
+    pub updated: usize,
+    /// Synchronisation rounds (one `lambda` step per region per round).
+    pub rounds: u64,
+    /// Refinement passes (RA-QUADTREE, section 6.2).
+    pub refinements: u64,
+    /// Leaves split over all refinements.
+    pub splits: u64,
+    /// The learned `sigma_1` (radians) over the updated regions: minimum, median (the
+    /// nearest-rank one) and maximum; NaN when no region was updated.
+    pub sigma_min: f64,
+    /// See [`AdaptSummary::sigma_min`].
+    pub sigma_median: f64,
+    /// See [`AdaptSummary::sigma_min`].
+    pub sigma_max: f64,
+}
+
+impl AdaptSummary {
+    /// The summary of the pooled statistics of `adapt`.
+    fn of(adapt: PathAdapt, pooled: &PooledRegionalStats<AdaptPartition<'_>>) -> Self {
+        let mut summary = Self {
+            adapt,
+            synchronised: false,
+            regions: pooled.num_regions(),
+            updated: 0,
+            rounds: pooled.rounds(),
+            refinements: pooled.refinements(),
+            splits: pooled.splits(),
+            sigma_min: f64::NAN,
+            sigma_median: f64::NAN,
+            sigma_max: f64::NAN,
+        };
+        let Some(sigmas) = pooled.sigmas() else {
+            return summary;
+        };
+        let mut updated: Vec<f64> = (0..pooled.num_regions())
+            .filter(|&k| pooled.region_stats(k).is_some_and(|r| r.adapt.updates > 1))
+            .map(|k| sigmas.get().sigmas_of_region(k)[0])
+            .collect();
+        updated.sort_by(f64::total_cmp);
+        let q = |f: f64| {
+            updated
+                .get(((updated.len().max(1) - 1) as f64 * f).round() as usize)
+                .copied()
+                .unwrap_or(f64::NAN)
+        };
+        summary.synchronised = true;
+        summary.updated = updated.len();
+        (summary.sigma_min, summary.sigma_median, summary.sigma_max) = (q(0.0), q(0.5), q(1.0));
+        summary
     }
-    format!(
-        "--adapt {}: {} regions ({} updated), {} rounds, {} refinements, {} splits; learned sigma (rad) min {:.3e}, median {:.3e}, max {:.3e}",
-        adapt.name(),
-        pooled.num_regions(),
-        updated.len(),
-        pooled.rounds(),
-        pooled.refinements(),
-        pooled.splits(),
-        q(0.0),
-        q(0.5),
-        q(1.0)
-    )
+
+    /// One line for people on the learned scales: regions, refinements, and `sigma` over the
+    /// regions that were updated at least once (the render's note).
+    #[must_use]
+    pub fn note(&self) -> String {
+        let name = self.adapt.name();
+        if !self.synchronised {
+            return format!("--adapt {name}: no synchronisation point reached");
+        }
+        if self.updated == 0 {
+            return format!(
+                "--adapt {name}: {} regions, none updated in {} rounds (sigma stays {PATHMLT_SIGMA} rad)",
+                self.regions, self.rounds
+            );
+        }
+        format!(
+            "--adapt {name}: {} regions ({} updated), {} rounds, {} refinements, {} splits; learned sigma (rad) min {:.3e}, median {:.3e}, max {:.3e}",
+            self.regions,
+            self.updated,
+            self.rounds,
+            self.refinements,
+            self.splits,
+            self.sigma_min,
+            self.sigma_median,
+            self.sigma_max
+        )
+    }
 }
