@@ -117,6 +117,9 @@ fn drmlt_rioux_lavoie2020_is_the_orbital_rule_on_pssmlt() {
         d
     );
     assert_ne!(tm, d);
+    // Cheap-then-expensive's MALA stage is the Langevin paper's preset.
+    assert_eq!(d.mala, render::mlt::mala::MalaConfig::default());
+    assert_eq!(d.mala, MalaSettings::luan2020().config);
 }
 
 #[test]

@@ -36,10 +36,11 @@ impl BdptSettings {
     /// Veach 1997's BDPT (chapter 10, power heuristic with exponent 2, eq. 9.13) over
     /// independent samples, as pbrt-v3 runs it.
     #[must_use]
-    pub fn veach1997() -> Self {
+    pub const fn veach1997() -> Self {
         Self {
             sampler: SamplerKind::Independent,
-            ..Self::default()
+            roulette: Roulette { start: Some(3) },
+            strategy_images: false,
         }
     }
 }

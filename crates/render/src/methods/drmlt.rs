@@ -13,7 +13,7 @@ use super::{
     bdpt_params, emitter_notes, mcmc_output, ChainSettings, IntegratorKind, Method, RenderOutput,
     RenderSettings, Run,
 };
-use crate::bdpt::{BdptParams, Roulette};
+use crate::bdpt::Roulette;
 use crate::error::RenderError;
 use crate::mlt::dr::{self, DrBase, DrVariant};
 use crate::mlt::mala::{self, MalaConfig};
@@ -49,20 +49,20 @@ impl DrmltSettings {
     /// and luminanceSamples), pairwise Kelemen first stage (docs/methods/drmlt.md lists where
     /// the authors' kernels differ).
     #[must_use]
-    pub fn rioux_lavoie2020() -> Self {
+    pub const fn rioux_lavoie2020() -> Self {
         Self::rioux_lavoie2020_with(DrVariant::Orbital, DrBase::Pssmlt)
     }
 
     /// [`DrmltSettings::rioux_lavoie2020`] with another rule and path sampler (the paper's
     /// Fig. 7 compares the rules on both samplers).
     #[must_use]
-    pub fn rioux_lavoie2020_with(variant: DrVariant, on: DrBase) -> Self {
+    pub const fn rioux_lavoie2020_with(variant: DrVariant, on: DrBase) -> Self {
         Self {
             chain: ChainSettings::kelemen2002(),
             variant,
             on,
-            mala: MalaConfig::default(),
-            roulette: BdptParams::default().roulette,
+            mala: super::MalaSettings::luan2020().config,
+            roulette: Roulette { start: Some(3) },
         }
     }
 }

@@ -28,7 +28,7 @@ impl LqmcSettings {
     /// 23 points for normal and depth-of-field paths and 97 for caustics, 24 image tiles
     /// across, 48 for caustics, 2 x 2 aperture tiles).
     #[must_use]
-    pub fn tessari2020() -> Self {
+    pub const fn tessari2020() -> Self {
         Self {
             params: LqmcParams::tessari2020(),
         }

@@ -70,7 +70,7 @@ impl MalaSettings {
 
     /// The command line's defaults for `variant` (the `mala*` rows).
     #[must_use]
-    pub fn with_variant(variant: MalaVariant) -> Self {
+    pub const fn with_variant(variant: MalaVariant) -> Self {
         Self::luan2020_variant(variant)
     }
 }

@@ -67,10 +67,10 @@ impl Default for QmcSettings {
 impl QmcSettings {
     /// `qmc-faure`: Faure's digit permutations under the per-pixel rotation.
     #[must_use]
-    pub fn faure() -> Self {
+    pub const fn faure() -> Self {
         Self {
             scrambling: Scrambling::Faure,
-            ..Self::default()
+            roulette: Some(ROULETTE_DEPTH),
         }
     }
 }
