@@ -23,9 +23,11 @@
 //!
 #![doc = concat!("```rust,no_run\n", include_str!("../examples/custom_target.rs"), "\n```")]
 
+pub mod dr;
 mod error;
 mod fresh;
 pub mod langevin;
+pub mod mala;
 mod mutation;
 pub mod noise;
 mod on_layout;
