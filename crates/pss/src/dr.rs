@@ -226,8 +226,10 @@ pub fn tierney_mira_kernel<C>(
     layout: PairLayout,
     p_large: f64,
     streams: SecondStageStreams<C>,
-) -> DelayedRejection<PairwiseMltProposal, ByState<IndependentSecondStage<OnLayout<PairwiseKelemen>>, C>>
-{
+) -> DelayedRejection<
+    PairwiseMltProposal,
+    ByState<IndependentSecondStage<OnLayout<PairwiseKelemen>>, C>,
+> {
     DelayedRejection::tierney_mira(
         first_stage(layout, p_large),
         streams.stages(|mask| timid_stage(layout, mask)),
@@ -293,7 +295,10 @@ mod tests {
         };
         x.set(0, 0.25);
         assert_eq!(
-            never.stages(|mask| orbital_stage(layout, mask)).pick(&x).stream_mask,
+            never
+                .stages(|mask| orbital_stage(layout, mask))
+                .pick(&x)
+                .stream_mask,
             0b01
         );
         let all = SecondStageStreams::all().stages(|mask| timid_stage(layout, mask));

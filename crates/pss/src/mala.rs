@@ -317,7 +317,10 @@ mod tests {
         ));
         for (name, v) in MalaVariant::ALL {
             assert_eq!(v.name(), name);
-            assert_eq!(v.has_cache(), matches!(v, MalaVariant::Cache | MalaVariant::Hybrid));
+            assert_eq!(
+                v.has_cache(),
+                matches!(v, MalaVariant::Cache | MalaVariant::Hybrid)
+            );
         }
     }
 }

@@ -25,7 +25,9 @@
 use mcmc_core::delayed_rejection::IndependentSecondStage;
 use mcmc_core::DelayedRejection;
 use pss::dr::{ByState, SecondStageStreams, StageChoice};
-use pss::{LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseMltProposal, PssState};
+use pss::{
+    LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseMltProposal, PssState,
+};
 
 use super::PATH_STREAMS;
 use crate::sampler::Stream;
