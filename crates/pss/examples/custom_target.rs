@@ -243,6 +243,12 @@ mod tests {
             })
             .collect();
         let t_wrong = worst_t(&reps, &wrong);
+        println!(
+            "{method:?}: worst pixel |t| {t:.2} vs the exact image, {t_wrong:.2} vs the wrong one"
+        );
+        println!(
+            "{method:?}: worst pixel |t| {t:.2} vs the exact image, {t_wrong:.2} vs the wrong one"
+        );
         assert!(
             t_wrong > 6.0,
             "{method:?}: negative control not detected (t = {t_wrong})"
