@@ -18,8 +18,8 @@ const MALA_SALT: u64 = 0x4d41_4c41_5053_5321;
 /// write its gradient in). Moved coordinates wrap around the unit torus, and the move's
 /// density is the *wrapped* Gaussian ([`ProposalGaussian::log_density_wrapped`]), so a
 /// proposal across the seam has the right density both ways (the reference implementation of
-/// Luan et al. 2020 wraps every coordinate mod 1 too; `docs/methods/mala.md`, "Primary sample
-/// space: read sets and the torus").
+/// Luan et al. 2020 wraps every coordinate mod 1 too; docs/methods/mala.md, "Readings and
+/// departures", item "Read sets").
 ///
 /// # Read sets
 /// The candidate is the current state with the moved coordinates replaced, no lazy mutation

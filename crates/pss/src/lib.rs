@@ -10,7 +10,10 @@
 //!
 //! [`FreshPss`] supplies independent points to `mcmc_core::render_loop`, so a renderer that
 //! implements one `mcmc_core::Target` over [`PssState`] gets PSSMLT with bootstrap, chain
-//! starts, deterministic multi-chain jobs, expected-value splatting and adaptive control.
+//! starts, deterministic multi-chain jobs, expected-value splatting and adaptive control; and
+//! with the kernels of [`dr`] it gets delayed-rejection MLT (on a [`PairLayout`] of what it
+//! reads), and of [`mala`], if it also implements `mcmc_core::DifferentiableTarget`, Langevin
+//! MLT.
 //!
 //! Lazy mutation is exact, rejections included: see [`PssState`] ("Why lazy equals eager").
 //!
@@ -18,14 +21,16 @@
 //!
 //! The whole outside-user program (`examples/custom_target.rs`; run it with
 //! `cargo run --release --example custom_target`): an analytic integrand rendered to a small
-//! image with PSSMLT and automatic large-step control. (Compiled here; its convergence test
-//! runs with the workspace tests.)
+//! image with PSSMLT and automatic large-step control, with DR orbital and with MALA.
+//! (Compiled here; its convergence tests run with the workspace tests.)
 //!
 #![doc = concat!("```rust,no_run\n", include_str!("../examples/custom_target.rs"), "\n```")]
 
+pub mod dr;
 mod error;
 mod fresh;
 pub mod langevin;
+pub mod mala;
 mod mutation;
 pub mod noise;
 mod on_layout;

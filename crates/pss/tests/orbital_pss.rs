@@ -1,10 +1,10 @@
 //! Delayed rejection with the pairwise orbital stages on lazy primary-sample-space states
-//! (issue 9, item 3): `mcmc_core::DelayedRejection` with the orbital rule (eq. 11), first
-//! stage [`PairwiseMltProposal`] (pairwise polar Kelemen on a fixed layout, optionally mixed
-//! with large steps), second stage [`OnLayout`]`<Orbital>`, keeps the PSS toy targets from
-//! exact starts: the torus mixture whose modes straddle both seams, the stripes whose read
-//! set depends on the state, and the roulette path that reads beyond the layout (layouts of
-//! odd dimension 5 and of 64).
+//! (DR paper section 4.4, Alg. 2; docs/methods/drmlt.md): `mcmc_core::DelayedRejection` with
+//! the orbital rule (eq. 11), first stage [`PairwiseMltProposal`] (pairwise polar Kelemen on a
+//! fixed layout, optionally mixed with large steps), second stage [`OnLayout`]`<Orbital>`,
+//! keeps the PSS toy targets from exact starts: the torus mixture whose modes straddle both
+//! seams, the stripes whose read set depends on the state, and the roulette path that reads
+//! beyond the layout (layouts of odd dimension 5 and of 64).
 //!
 //! Negative control ([`Unlogged`]): a first stage that moves `x`'s *stored* values instead of
 //! reading them through the candidate (so stale coordinates are neither caught up nor logged

@@ -2,39 +2,31 @@
 //! on the path samplers: the kernels of `mcmc_core::delayed_rejection` with the pairwise
 //! primary-sample-space stages of `pss` ([`pss::OnLayout`]).
 //!
-//! Every variant is *bold then timid* (section 5.1) and runs its second stage only after a
-//! rejected small step, never after a large step (the authors' implementation; the mixture
-//! terms are component-labelled, docs/methods/drmlt.md):
-//! - `orbital` (section 4.4, eq. 11): a pairwise polar Kelemen first stage (radii x 1.9, the
-//!   authors' preset) and the orbital second stage (wrapped Cauchy, rho = exp(-1/4));
-//! - `tierney-mira` (eq. 6-7): the same bold first stage, then a timid pairwise Kelemen step
-//!   from `x` with radii / 10 (independent of the rejected `y`; symmetric);
-//! - `green-mira` (eq. 12-14): the same stages with the fictional state `y* = z - (y - x)`
-//!   on the torus ([`pss::LayoutGhost`]).
-//!
-//! On MMLT (`DrBase::Mmlt`, section 5.1.2) the second stage moves only the camera stream:
-//! the light subpath and the strategy choice (the first number of the connection stream) stay
-//! fixed. Light-tracing strategies (t = 1, "Handling Light Tracing" in section 5.1.2) are the
-//! exception: their camera stream holds only the raster position, which the connection
-//! overrides, so their second stage moves the camera *and* light streams ([`ByStrategy`],
-//! which reads the strategy of the current state; the second stage never moves the strategy
-//! coordinate, so the reverse path sees the same strategy and the choice is symmetric).
+//! The kernels are `pss`'s renderer-agnostic recipes ([`pss::dr`]: every variant *bold then
+//! timid*, section 5.1, the second stage only after a rejected small step); this module keeps
+//! what is specific to BDPT and MMLT:
+//! - the pair layout, sized from the maximum path depth to cover what BDPT reads
+//!   ([`dr_layout`]); coordinates beyond it are renewed by large steps only (exact, see
+//!   [`pss::OnLayout`]);
+//! - the second stage's streams. On MMLT (`DrBase::Mmlt`, section 5.1.2) the second stage
+//!   moves only the camera stream: the light subpath and the strategy choice (the first number
+//!   of the connection stream) stay fixed. Light-tracing strategies (t = 1, "Handling Light
+//!   Tracing" in section 5.1.2) are the exception: their camera stream holds only the raster
+//!   position, which the connection overrides, so their second stage moves the camera *and*
+//!   light streams ([`ByStrategy`], which reads the strategy of the current state through
+//!   [`LightTracing`]; the second stage never moves the strategy coordinate, so the reverse
+//!   path sees the same strategy and the choice is symmetric).
 //!
 //! Our reading where the paper fixes the MMLT strategy along the whole chain: the bold first
 //! stage here moves every stream's layout, strategy coordinate included, so a first-stage
 //! candidate may change strategy (an exact move of the MMLT target; it is then judged by the
 //! usual acceptance). Only the second stage keeps the strategy.
-//!
-//! The pairwise stages move a fixed layout of coordinates per stream, sized from the maximum
-//! path depth to cover what BDPT reads ([`dr_layout`]); coordinates beyond it are renewed by
-//! large steps only (exact, see [`pss::OnLayout`]).
 
 use mcmc_core::delayed_rejection::IndependentSecondStage;
-use mcmc_core::proposal::ConditionalProposal;
-use mcmc_core::{DelayedRejection, Proposed};
+use mcmc_core::DelayedRejection;
+use pss::dr::{ByState, SecondStageStreams, StageChoice};
 use pss::{
-    LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseKelemenParams,
-    PairwiseMltProposal, PssState, WrappedCauchy,
+    LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseMltProposal, PssState,
 };
 
 use super::PATH_STREAMS;
@@ -110,35 +102,8 @@ pub fn dr_layout(max_depth: u32) -> PairLayout {
     PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
 }
 
-/// The radius scale of the timid second stage of Tierney-Mira and Green-Mira (the authors'
-/// sigma / 10).
-pub const TIMID_SCALE: f64 = 0.1;
-
-/// The bold first stage with large steps of probability `p_large`.
-fn first_stage(layout: PairLayout, p_large: f64) -> PairwiseMltProposal {
-    let small = OnLayout::new(
-        PairwiseKelemen {
-            params: PairwiseKelemenParams::drmlt2020(),
-        },
-        layout,
-    );
-    PairwiseMltProposal::new(small, p_large.clamp(0.0, 1.0))
-        .unwrap_or_else(|_| unreachable!("clamped"))
-}
-
-/// The timid second stage (Tierney-Mira, Green-Mira): a pairwise Kelemen step from `x` with
-/// radii scaled by [`TIMID_SCALE`].
-fn timid_stage(
-    layout: PairLayout,
-    stream_mask: u8,
-) -> IndependentSecondStage<OnLayout<PairwiseKelemen>> {
-    let p = PairwiseKelemenParams::drmlt2020();
-    let params = PairwiseKelemenParams::new(p.r_min * TIMID_SCALE, p.r_max * TIMID_SCALE)
-        .unwrap_or_else(|_| unreachable!("scaled presets stay valid"));
-    IndependentSecondStage(
-        OnLayout::new(PairwiseKelemen { params }, layout).with_stream_mask(stream_mask),
-    )
-}
+/// The radius scale of the timid second stage (moved to [`pss::dr`]).
+pub use pss::dr::TIMID_SCALE;
 
 /// Streams the second stage moves on `base`.
 #[must_use]
@@ -174,55 +139,42 @@ pub fn is_light_tracing(x: &PssState, depth: u32) -> bool {
     n - s == 1
 }
 
+/// The MMLT strategy choice of the second stage (DR paper section 5.1.2, "Handling Light
+/// Tracing"): picks the light-tracing states ([`is_light_tracing`]) of an MMLT target of depth
+/// `depth`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightTracing {
+    /// The MMLT depth of the chain's target.
+    pub depth: u32,
+}
+
+impl StageChoice for LightTracing {
+    #[inline]
+    fn alternate(&self, x: &PssState) -> bool {
+        is_light_tracing(x, self.depth)
+    }
+}
+
 /// A second stage that depends on the MMLT strategy of the current state (DR paper section
-/// 5.1.2, "Handling Light Tracing"): `light_tracing` for `t = 1` states of an MMLT target of
-/// depth `depth`, `normal` otherwise (and always `normal` without a depth: PSSMLT). The
-/// strategy coordinate is outside both stages' streams, so `z` and the ghost keep `x`'s
-/// strategy and the reverse path makes the same choice.
-#[derive(Clone, Copy, Debug)]
-pub struct ByStrategy<P> {
-    /// The MMLT depth of the chain's target, or `None` (PSSMLT: one stage).
-    pub depth: Option<u32>,
-    /// The stage of every other state.
-    pub normal: P,
-    /// The stage of light-tracing states.
-    pub light_tracing: P,
-}
+/// 5.1.2, "Handling Light Tracing"): `alternate` (made for [`light_tracing_streams`]) for
+/// `t = 1` states of an MMLT target of depth `depth`, `normal` otherwise (and always `normal`
+/// without a depth: PSSMLT). The strategy coordinate is outside both stages' streams, so `z`
+/// and the ghost keep `x`'s strategy and the reverse path makes the same choice.
+pub type ByStrategy<P> = ByState<P, Option<LightTracing>>;
 
-impl<P> ByStrategy<P> {
-    fn pick(&self, x: &PssState) -> &P {
-        match self.depth {
-            Some(d) if is_light_tracing(x, d) => &self.light_tracing,
-            _ => &self.normal,
-        }
+/// The second stage's streams on `base` for chains of MMLT depth `depth`
+/// ([`second_stage_streams`], and [`light_tracing_streams`] for light-tracing states on MMLT).
+#[must_use]
+pub fn strategy_streams(base: DrBase, depth: u32) -> SecondStageStreams<Option<LightTracing>> {
+    SecondStageStreams {
+        normal: second_stage_streams(base),
+        alternate: light_tracing_streams(),
+        choice: (base == DrBase::Mmlt).then_some(LightTracing { depth }),
     }
 }
 
-impl<P: ConditionalProposal<PssState>> ConditionalProposal<PssState> for ByStrategy<P> {
-    fn propose<R: rand::Rng + ?Sized>(
-        &self,
-        x: &PssState,
-        y: &PssState,
-        z: &mut PssState,
-        rng: &mut R,
-    ) -> Proposed {
-        self.pick(x).propose(x, y, z, rng)
-    }
-    fn log_q(&self, x: &PssState, y: &PssState, z: &PssState) -> f64 {
-        self.pick(x).log_q(x, y, z)
-    }
-}
-
-/// The strategy-aware second stage made by `stage(stream_mask)` for `base` and `depth`.
-fn by_strategy<P>(base: DrBase, depth: u32, stage: impl Fn(u8) -> P) -> ByStrategy<P> {
-    ByStrategy {
-        depth: (base == DrBase::Mmlt).then_some(depth),
-        normal: stage(second_stage_streams(base)),
-        light_tracing: stage(light_tracing_streams()),
-    }
-}
-
-/// The orbital kernel (`depth`: the MMLT depth of the chain's target; ignored on PSSMLT).
+/// The orbital kernel (`depth`: the MMLT depth of the chain's target; ignored on PSSMLT):
+/// [`pss::dr::orbital_kernel`] with [`strategy_streams`].
 #[must_use]
 pub fn orbital_kernel(
     layout: PairLayout,
@@ -230,19 +182,11 @@ pub fn orbital_kernel(
     p_large: f64,
     depth: u32,
 ) -> DelayedRejection<PairwiseMltProposal, ByStrategy<OnLayout<Orbital>>> {
-    let second = by_strategy(base, depth, |mask| {
-        OnLayout::new(
-            Orbital {
-                angle: WrappedCauchy::default(),
-            },
-            layout,
-        )
-        .with_stream_mask(mask)
-    });
-    DelayedRejection::orbital(first_stage(layout, p_large), second).second_stage_after_small_steps()
+    pss::dr::orbital_kernel(layout, p_large, strategy_streams(base, depth))
 }
 
-/// The Tierney-Mira kernel (`depth` as [`orbital_kernel`]).
+/// The Tierney-Mira kernel (`depth` as [`orbital_kernel`]): [`pss::dr::tierney_mira_kernel`]
+/// with [`strategy_streams`].
 #[must_use]
 pub fn tierney_mira_kernel(
     layout: PairLayout,
@@ -253,15 +197,11 @@ pub fn tierney_mira_kernel(
     PairwiseMltProposal,
     ByStrategy<IndependentSecondStage<OnLayout<PairwiseKelemen>>>,
 > {
-    DelayedRejection::tierney_mira(
-        first_stage(layout, p_large),
-        by_strategy(base, depth, |mask| timid_stage(layout, mask)),
-    )
-    .with_symmetric_second_stage()
-    .second_stage_after_small_steps()
+    pss::dr::tierney_mira_kernel(layout, p_large, strategy_streams(base, depth))
 }
 
-/// The Green-Mira kernel (`depth` as [`orbital_kernel`]).
+/// The Green-Mira kernel (`depth` as [`orbital_kernel`]): [`pss::dr::green_mira_kernel`] with
+/// [`strategy_streams`].
 #[must_use]
 pub fn green_mira_kernel(
     layout: PairLayout,
@@ -273,14 +213,5 @@ pub fn green_mira_kernel(
     ByStrategy<IndependentSecondStage<OnLayout<PairwiseKelemen>>>,
     LayoutGhost,
 > {
-    DelayedRejection::green_mira(
-        first_stage(layout, p_large),
-        by_strategy(base, depth, |mask| timid_stage(layout, mask)),
-        LayoutGhost {
-            layout,
-            stream_mask: pss::ALL_STREAMS,
-        },
-    )
-    .with_symmetric_second_stage()
-    .second_stage_after_small_steps()
+    pss::dr::green_mira_kernel(layout, p_large, strategy_streams(base, depth))
 }

@@ -7,91 +7,35 @@
 //!   differentiated with respect to the coordinates the path read, by forward-mode dual
 //!   numbers through the differentiable path evaluator [`crate::bdpt::diff`] (finite
 //!   differences of the f32 evaluator as the fallback and as an option).
-//! - **Which chains run MALA** (the paper's section 7 rule, "MALA only for paths shorter than
-//!   8 vertices, i.e. fewer than 16 primary-sample dimensions in their parameterisation,
-//!   Kelemen/Gaussian mutations beyond"): our layout reads about 4 numbers per vertex (camera
+//! - **Chain kernels.** `pss`'s renderer-agnostic recipe ([`pss::mala`]): MALA on chains of
+//!   MMLT depth `<= MalaConfig::max_depth`, PSSMLT's Kelemen small step beyond (the paper's
+//!   section 7 rule stated by path depth: our layout reads about 4 numbers per vertex — camera
 //!   stream: raster 2 + lens 2 + time 1 + 4 per bounce; light stream: 5 + 4 per bounce;
-//!   connection stream: the strategy choice plus up to 3), so we state the rule by *path
-//!   depth*: chains of MMLT depth `<= MalaConfig::max_depth` (default 3: at most about 20
-//!   moved coordinates; docs/methods/mala.md has the measured dimensions) use MALA, deeper
-//!   chains use PSSMLT's Kelemen small step. The depth is fixed per chain (MMLT), so the
-//!   choice is a fixed kernel per chain and needs no state-dependent selection term.
-//! - **Read sets.** A MALA candidate that reads a different set of coordinates than the
-//!   current state (another strategy, a path that ends early) is rejected
-//!   ([`pss::langevin::PssCoordinates`]).
-//! - **Variants** (`--integrator`): `mala` (plain, eq. 7), `mala-online` (Alg. 2, diminishing
-//!   adaptation), `mala-cache` (Alg. 3), `mala-hybrid` (Alg. 4); each mixed with the large
-//!   step of the MCMC settings. Adaptation is kept per dimension
-//!   ([`mcmc_core::langevin::PerDimension`]); the caches of `mala-cache` and `mala-hybrid` are
-//!   shared by all chains ([`mcmc_core::langevin::CacheSharing`]), deterministically.
+//!   connection stream: the strategy choice plus up to 3 — so the default depth 3 moves at
+//!   most about 20 coordinates; docs/methods/mala.md has the measured dimensions). A MALA
+//!   candidate that reads a different set of coordinates than the current state (another
+//!   strategy, a path that ends early) is rejected ([`pss::langevin::PssCoordinates`]).
+//! - **Variants** (`--integrator`, [`MalaVariant`]): `mala` (plain, eq. 7), `mala-online`
+//!   (Alg. 2, diminishing adaptation), `mala-cache` (Alg. 3), `mala-hybrid` (Alg. 4); each
+//!   mixed with the large step of the MCMC settings. The caches of `mala-cache` and
+//!   `mala-hybrid` are shared by all chains ([`mcmc_core::langevin::CacheSharing`]),
+//!   deterministically.
 //! - **Delayed rejection, cheap then expensive** (DR paper section 5.2, with MALA instead of
 //!   H2MC): [`cheap_then_expensive_kernel`], an isotropic Gaussian first stage and a plain MALA
 //!   second stage under Green and Mira's rule.
 
 use std::cell::RefCell;
 
-use mcmc_core::controller::LargeStepTunable;
-use mcmc_core::langevin::{
-    Adaptation, AnyAdaptation, CacheDriven, CacheSharing, CacheView, CheapThenExpensive,
-    HasGradientCache, Hybrid, Langevin, LangevinParams, Online, PerDimension, Plain,
-};
-use mcmc_core::{DifferentiableTarget, Kernel, Mh, Observer, SampleOf, StepInfo, Target};
-use pss::langevin::{moved_indices, PssCoordinates};
-use pss::{LargeStep, Pending, PssState, PssmltProposal, SmallMutation, SmallStep};
-use rand::Rng;
+use mcmc_core::langevin::{CacheSharing, LangevinParams};
+use mcmc_core::{DifferentiableTarget, Target};
+use pss::langevin::moved_indices;
+use pss::mala::MalaParams;
+use pss::{Pending, PssState, SmallMutation};
+
+pub use pss::mala::{MalaChainKernel, MalaVariant};
 
 use super::{MmltTarget, PathPayload, PATH_STREAMS};
 use crate::bdpt::diff::{DiffScene, Dual, Evaluation};
-
-/// The MALA variant of `--integrator mala*`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum MalaVariant {
-    /// Plain MALA (eq. 7): no adaptation.
-    Plain,
-    /// Online adaptation with diminishing adaptation (Alg. 2).
-    Online,
-    /// Cache-driven adaptation (Alg. 3).
-    Cache,
-    /// Hybrid adaptation (Alg. 4) — the paper's main algorithm.
-    #[default]
-    Hybrid,
-}
-
-impl MalaVariant {
-    /// The variants with their `--integrator` names.
-    pub const ALL: [(&'static str, MalaVariant); 4] = [
-        ("mala", MalaVariant::Plain),
-        ("mala-online", MalaVariant::Online),
-        ("mala-cache", MalaVariant::Cache),
-        ("mala-hybrid", MalaVariant::Hybrid),
-    ];
-
-    /// The `--integrator` name.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        Self::ALL
-            .iter()
-            .find(|(_, v)| *v == self)
-            .map_or("mala-hybrid", |(n, _)| n)
-    }
-
-    /// A fresh adaptation of this variant.
-    #[must_use]
-    pub fn adaptation(self, params: &LangevinParams) -> AnyAdaptation {
-        match self {
-            MalaVariant::Plain => AnyAdaptation::Plain(Plain),
-            MalaVariant::Online => AnyAdaptation::Online(Online::new(true)),
-            MalaVariant::Cache => AnyAdaptation::Cache(CacheDriven::new(params)),
-            MalaVariant::Hybrid => AnyAdaptation::Hybrid(Hybrid::new(params)),
-        }
-    }
-
-    /// True if the variant keeps a gradient cache (shared among chains).
-    #[must_use]
-    pub fn has_cache(self) -> bool {
-        matches!(self, MalaVariant::Cache | MalaVariant::Hybrid)
-    }
-}
 
 /// How [`DifferentiableMmlt`] computes the gradient of the log luminance.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -136,13 +80,28 @@ pub struct MalaConfig {
 
 impl Default for MalaConfig {
     fn default() -> Self {
+        let p = MalaParams::luan2020();
         Self {
-            variant: MalaVariant::Hybrid,
-            params: LangevinParams::luan2020(),
-            max_depth: 3,
+            variant: p.variant,
+            params: p.langevin,
+            max_depth: p.max_depth,
             gradient: GradientMethod::Dual,
             fd_step: 1e-4,
-            cheap_sigma: 1.0 / 64.0,
+            cheap_sigma: p.cheap_sigma,
+        }
+    }
+}
+
+impl MalaConfig {
+    /// The chain-kernel settings of `pss` ([`pss::mala::MalaParams`]): variant, MALA's
+    /// parameters, depth rule and cheap stage.
+    #[must_use]
+    pub const fn mala_params(&self) -> MalaParams {
+        MalaParams {
+            variant: self.variant,
+            langevin: self.params,
+            max_depth: self.max_depth,
+            cheap_sigma: self.cheap_sigma,
         }
     }
 }
@@ -314,20 +273,9 @@ impl DifferentiableTarget for DifferentiableMmlt<'_> {
     }
 }
 
-/// The kernel of one chain of Langevin MLT: MALA with large steps for shallow depths, the
-/// PSSMLT Kelemen mixture for deep ones, or the cheap-then-expensive delayed rejection.
-#[derive(Clone, Debug)]
-pub enum MalaChainKernel {
-    /// MALA with adaptation, mixed with large steps.
-    Mala(Langevin<PerDimension<AnyAdaptation>, PssCoordinates, LargeStep>),
-    /// Delayed rejection: isotropic Gaussian, then MALA (Green-Mira).
-    CheapThenExpensive(CheapThenExpensive<PerDimension<AnyAdaptation>, PssCoordinates, LargeStep>),
-    /// PSSMLT's Kelemen small step with large steps (deep chains).
-    Kelemen(Mh<PssmltProposal>),
-}
-
-/// The kernel of a chain of MMLT depth `depth`: MALA of `config` with large-step probability
-/// `p_large` if `depth <= config.max_depth`, else Kelemen's small step `small`.
+/// The kernel of a chain of MMLT depth `depth`: [`pss::mala::mala_kernel`] with the settings
+/// of `config` (MALA with large-step probability `p_large` if `depth <= config.max_depth`,
+/// else Kelemen's small step `small`).
 #[must_use]
 pub fn mala_kernel(
     config: &MalaConfig,
@@ -335,21 +283,12 @@ pub fn mala_kernel(
     small: SmallMutation,
     p_large: f64,
 ) -> MalaChainKernel {
-    let p = p_large.clamp(0.0, 1.0);
-    if depth > config.max_depth {
-        return kelemen(small, p);
-    }
-    let adaptation = PerDimension::new(config.variant.adaptation(&config.params));
-    match Langevin::new(config.params, adaptation, PssCoordinates)
-        .and_then(|k| k.with_large_step(LargeStep, p))
-    {
-        Ok(k) => MalaChainKernel::Mala(k),
-        Err(_) => kelemen(small, p),
-    }
+    pss::mala::mala_kernel(&config.mala_params(), depth, small, p_large)
 }
 
-/// The cheap-then-expensive delayed-rejection kernel of a chain of depth `depth` (Kelemen's
-/// small step beyond `config.max_depth`, as [`mala_kernel`]).
+/// The cheap-then-expensive delayed-rejection kernel of a chain of depth `depth`:
+/// [`pss::mala::cheap_then_expensive_kernel`] with the settings of `config` (Kelemen's small
+/// step beyond `config.max_depth`, as [`mala_kernel`]).
 #[must_use]
 pub fn cheap_then_expensive_kernel(
     config: &MalaConfig,
@@ -357,109 +296,7 @@ pub fn cheap_then_expensive_kernel(
     small: SmallMutation,
     p_large: f64,
 ) -> MalaChainKernel {
-    let p = p_large.clamp(0.0, 1.0);
-    if depth > config.max_depth {
-        return kelemen(small, p);
-    }
-    let adaptation = PerDimension::new(AnyAdaptation::Plain(Plain));
-    match CheapThenExpensive::new(
-        config.params,
-        config.cheap_sigma,
-        adaptation,
-        PssCoordinates,
-    )
-    .and_then(|k| k.with_large_step(LargeStep, p))
-    {
-        Ok(k) => MalaChainKernel::CheapThenExpensive(k),
-        Err(_) => kelemen(small, p),
-    }
-}
-
-fn kelemen(small: SmallMutation, p: f64) -> MalaChainKernel {
-    MalaChainKernel::Kelemen(Mh::new(
-        PssmltProposal::new(SmallStep::new(small), p).unwrap_or_else(|_| unreachable!("clamped")),
-    ))
-}
-
-impl<T: DifferentiableTarget<State = PssState>> Kernel<T> for MalaChainKernel {
-    fn stages(&self) -> usize {
-        match self {
-            MalaChainKernel::Mala(k) => Kernel::<T>::stages(k),
-            MalaChainKernel::CheapThenExpensive(k) => Kernel::<T>::stages(k),
-            MalaChainKernel::Kelemen(k) => Kernel::<T>::stages(k),
-        }
-    }
-
-    fn step<R, O>(
-        &mut self,
-        target: &T,
-        current: &mut SampleOf<T>,
-        scratch: &mut [SampleOf<T>],
-        rng: &mut R,
-        observer: &mut O,
-    ) -> StepInfo
-    where
-        R: Rng + ?Sized,
-        O: Observer<T::State, T::Payload> + ?Sized,
-    {
-        match self {
-            MalaChainKernel::Mala(k) => k.step(target, current, scratch, rng, observer),
-            MalaChainKernel::CheapThenExpensive(k) => {
-                k.step(target, current, scratch, rng, observer)
-            }
-            MalaChainKernel::Kelemen(k) => k.step(target, current, scratch, rng, observer),
-        }
-    }
-
-    fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
-        match self {
-            MalaChainKernel::Mala(k) => k.log_flow(target, path),
-            MalaChainKernel::CheapThenExpensive(k) => k.log_flow(target, path),
-            MalaChainKernel::Kelemen(k) => k.log_flow(target, path),
-        }
-    }
-
-    fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
-        match self {
-            MalaChainKernel::Mala(k) => k.reverse_path(target, path),
-            MalaChainKernel::CheapThenExpensive(k) => k.reverse_path(target, path),
-            MalaChainKernel::Kelemen(k) => k.reverse_path(target, path),
-        }
-    }
-}
-
-impl LargeStepTunable for MalaChainKernel {
-    fn large_step_probability(&self) -> f64 {
-        match self {
-            MalaChainKernel::Mala(k) => k.large_step_probability(),
-            MalaChainKernel::CheapThenExpensive(k) => k.large_step_probability(),
-            MalaChainKernel::Kelemen(k) => k.large_step_probability(),
-        }
-    }
-    fn set_large_step_probability(&mut self, p: f64) {
-        match self {
-            MalaChainKernel::Mala(k) => k.set_large_step_probability(p),
-            MalaChainKernel::CheapThenExpensive(k) => k.set_large_step_probability(p),
-            MalaChainKernel::Kelemen(k) => k.set_large_step_probability(p),
-        }
-    }
-    fn is_large_step(&self, component: usize) -> bool {
-        match self {
-            MalaChainKernel::Mala(k) => k.is_large_step(component),
-            MalaChainKernel::CheapThenExpensive(k) => k.is_large_step(component),
-            MalaChainKernel::Kelemen(k) => k.is_large_step(component),
-        }
-    }
-}
-
-impl HasGradientCache for MalaChainKernel {
-    fn for_each_gradient_cache(&mut self, f: &mut dyn FnMut(&mut CacheView)) {
-        match self {
-            MalaChainKernel::Mala(k) => k.adaptation.for_each_cache(f),
-            MalaChainKernel::CheapThenExpensive(k) => k.adaptation.for_each_cache(f),
-            MalaChainKernel::Kelemen(_) => {}
-        }
-    }
+    pss::mala::cheap_then_expensive_kernel(&config.mala_params(), depth, small, p_large)
 }
 
 /// Renders Langevin MLT over the differentiable MMLT targets of `scene` (depths

@@ -1,0 +1,324 @@
+//! Delayed-rejection MLT kernels on a pair layout (Rioux-Lavoie et al. 2020,
+//! docs/methods/drmlt.md): bold first stage, timid or orbital second stage, with per-stream
+//! second-stage masks, optionally chosen per state.
+//!
+//! Every kernel here is *bold then timid* (DR paper section 5.1) and runs its second stage only
+//! after a rejected small step, never after a large step (the authors' implementation; the
+//! mixture terms are component-labelled, docs/methods/drmlt.md):
+//! - [`orbital_kernel`] (section 4.4, eq. 11): a pairwise polar Kelemen first stage (radii
+//!   x 1.9, the authors' preset [`PairwiseKelemenParams::drmlt2020`]) and the orbital second
+//!   stage (wrapped Cauchy, rho = exp(-1/4));
+//! - [`tierney_mira_kernel`] (eq. 6-7): the same bold first stage, then a timid pairwise
+//!   Kelemen step from `x` with radii x [`TIMID_SCALE`] (independent of the rejected `y`;
+//!   symmetric);
+//! - [`green_mira_kernel`] (eq. 12-14): the same stages with the fictional state
+//!   `y* = z - (y - x)` on the torus ([`LayoutGhost`]).
+//!
+//! A renderer supplies two things: the [`PairLayout`] of coordinates the pairwise stages move
+//! per stream (what its path sampler reads; coordinates beyond it are renewed by large steps
+//! only, exactly, see [`OnLayout`]), and the streams the second stage moves
+//! ([`SecondStageStreams`]). On PSSMLT the second stage moves every stream
+//! ([`SecondStageStreams::all`]); on multiplexed MLT (section 5.1.2) it moves the camera
+//! subpath only, except for states whose strategy needs another mask ("Handling Light
+//! Tracing"): a [`StageChoice`] reads the current state and picks that mask. The second stage
+//! must never move what the choice reads, so that `z` and the ghost make the same choice as
+//! `x` and the reverse path is the one through the same stage.
+//!
+//! # Example
+//! ```
+//! use pss::dr::{orbital_kernel, SecondStageStreams};
+//! use pss::PairLayout;
+//!
+//! // One stream, two coordinates (a 2-D integrand), large steps with probability 0.3.
+//! let kernel = orbital_kernel(PairLayout::single_stream(2), 0.3, SecondStageStreams::all());
+//! assert!(kernel.runs_second_stage_after(0) && !kernel.runs_second_stage_after(1));
+//! ```
+
+use mcmc_core::delayed_rejection::IndependentSecondStage;
+use mcmc_core::proposal::ConditionalProposal;
+use mcmc_core::{DelayedRejection, Proposed};
+use rand::Rng;
+
+use crate::on_layout::{LayoutGhost, OnLayout, PairwiseMltProposal};
+use crate::orbital::Orbital;
+use crate::pairwise::{PairLayout, PairwiseKelemen, PairwiseKelemenParams};
+use crate::proposal::ALL_STREAMS;
+use crate::state::PssState;
+use crate::WrappedCauchy;
+
+/// The radius scale of the timid second stage of Tierney-Mira and Green-Mira (the authors'
+/// sigma / 10, DR paper section 5.1).
+pub const TIMID_SCALE: f64 = 0.1;
+
+/// Which of two second stages a state gets: the *alternate* one where
+/// [`StageChoice::alternate`] is true, the *normal* one elsewhere.
+///
+/// The choice must depend only on coordinates the second stage does not move (the DR paper's
+/// MMLT strategy choice, section 5.1.2), so that `z` and the ghost choose as `x` does.
+pub trait StageChoice {
+    /// True if the current state `x` gets the alternate second stage.
+    fn alternate(&self, x: &PssState) -> bool;
+}
+
+/// The normal second stage for every state (no per-state choice).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NormalOnly;
+
+impl StageChoice for NormalOnly {
+    #[inline]
+    fn alternate(&self, _x: &PssState) -> bool {
+        false
+    }
+}
+
+/// `None` chooses the normal stage for every state; `Some(c)` chooses as `c`.
+impl<C: StageChoice> StageChoice for Option<C> {
+    #[inline]
+    fn alternate(&self, x: &PssState) -> bool {
+        match self {
+            Some(c) => c.alternate(x),
+            None => false,
+        }
+    }
+}
+
+/// The streams the second stage moves (bit `s` = stream `s`): `normal` for every state,
+/// `alternate` for the states `choice` picks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SecondStageStreams<C = NormalOnly> {
+    /// The streams moved from every state `choice` does not pick.
+    pub normal: u8,
+    /// The streams moved from the states `choice` picks.
+    pub alternate: u8,
+    /// Which states get `alternate`.
+    pub choice: C,
+}
+
+impl SecondStageStreams<NormalOnly> {
+    /// Every stream, from every state (DRMLT on PSSMLT, section 5.1.1).
+    #[must_use]
+    pub const fn all() -> Self {
+        Self::only(ALL_STREAMS)
+    }
+
+    /// The streams of `mask`, from every state.
+    #[must_use]
+    pub const fn only(mask: u8) -> Self {
+        Self {
+            normal: mask,
+            alternate: mask,
+            choice: NormalOnly,
+        }
+    }
+}
+
+impl<C> SecondStageStreams<C> {
+    /// The second stage made by `stage(mask)` for both masks, chosen per state.
+    pub fn stages<P>(self, stage: impl Fn(u8) -> P) -> ByState<P, C> {
+        ByState {
+            normal: stage(self.normal),
+            alternate: stage(self.alternate),
+            choice: self.choice,
+        }
+    }
+}
+
+/// A second stage chosen per current state (DR paper section 5.1.2, "Handling Light
+/// Tracing"): `alternate` where `choice` picks `x`, `normal` elsewhere. Exact when the choice
+/// reads only coordinates neither stage moves (see [`StageChoice`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ByState<P, C> {
+    /// The stage of every state `choice` does not pick.
+    pub normal: P,
+    /// The stage of the states `choice` picks.
+    pub alternate: P,
+    /// Which states get `alternate`.
+    pub choice: C,
+}
+
+impl<P, C: StageChoice> ByState<P, C> {
+    /// The stage of current state `x`.
+    #[inline]
+    pub fn pick(&self, x: &PssState) -> &P {
+        if self.choice.alternate(x) {
+            &self.alternate
+        } else {
+            &self.normal
+        }
+    }
+}
+
+impl<P: ConditionalProposal<PssState>, C: StageChoice> ConditionalProposal<PssState>
+    for ByState<P, C>
+{
+    fn propose<R: Rng + ?Sized>(
+        &self,
+        x: &PssState,
+        y: &PssState,
+        z: &mut PssState,
+        rng: &mut R,
+    ) -> Proposed {
+        self.pick(x).propose(x, y, z, rng)
+    }
+    fn log_q(&self, x: &PssState, y: &PssState, z: &PssState) -> f64 {
+        self.pick(x).log_q(x, y, z)
+    }
+}
+
+/// The bold first stage: a large step with probability `p_large` (clamped to `[0, 1]`), else
+/// the pairwise polar Kelemen step on every stream of `layout` with the authors' radii
+/// ([`PairwiseKelemenParams::drmlt2020`]).
+#[must_use]
+pub fn first_stage(layout: PairLayout, p_large: f64) -> PairwiseMltProposal {
+    let small = OnLayout::new(
+        PairwiseKelemen {
+            params: PairwiseKelemenParams::drmlt2020(),
+        },
+        layout,
+    );
+    PairwiseMltProposal::new(small, p_large.clamp(0.0, 1.0))
+        .unwrap_or_else(|_| unreachable!("clamped"))
+}
+
+/// The timid second stage of Tierney-Mira and Green-Mira: a pairwise Kelemen step from `x`
+/// with radii scaled by [`TIMID_SCALE`], on the streams of `stream_mask`.
+#[must_use]
+pub fn timid_stage(
+    layout: PairLayout,
+    stream_mask: u8,
+) -> IndependentSecondStage<OnLayout<PairwiseKelemen>> {
+    let p = PairwiseKelemenParams::drmlt2020();
+    let params = PairwiseKelemenParams::new(p.r_min * TIMID_SCALE, p.r_max * TIMID_SCALE)
+        .unwrap_or_else(|_| unreachable!("scaled presets stay valid"));
+    IndependentSecondStage(
+        OnLayout::new(PairwiseKelemen { params }, layout).with_stream_mask(stream_mask),
+    )
+}
+
+/// The orbital stage (wrapped Cauchy angle, eq. 10) on the streams of `stream_mask`.
+#[must_use]
+pub fn orbital_stage(layout: PairLayout, stream_mask: u8) -> OnLayout<Orbital> {
+    OnLayout::new(
+        Orbital {
+            angle: WrappedCauchy::default(),
+        },
+        layout,
+    )
+    .with_stream_mask(stream_mask)
+}
+
+/// The orbital kernel (DR paper section 4.4, eq. 11): [`first_stage`], then
+/// [`orbital_stage`] on the streams of `streams` after a rejected small step.
+#[must_use]
+pub fn orbital_kernel<C>(
+    layout: PairLayout,
+    p_large: f64,
+    streams: SecondStageStreams<C>,
+) -> DelayedRejection<PairwiseMltProposal, ByState<OnLayout<Orbital>, C>> {
+    let second = streams.stages(|mask| orbital_stage(layout, mask));
+    DelayedRejection::orbital(first_stage(layout, p_large), second).second_stage_after_small_steps()
+}
+
+/// The Tierney-Mira kernel (eq. 6-7): [`first_stage`], then [`timid_stage`] on the streams of
+/// `streams` after a rejected small step.
+#[must_use]
+pub fn tierney_mira_kernel<C>(
+    layout: PairLayout,
+    p_large: f64,
+    streams: SecondStageStreams<C>,
+) -> DelayedRejection<
+    PairwiseMltProposal,
+    ByState<IndependentSecondStage<OnLayout<PairwiseKelemen>>, C>,
+> {
+    DelayedRejection::tierney_mira(
+        first_stage(layout, p_large),
+        streams.stages(|mask| timid_stage(layout, mask)),
+    )
+    .with_symmetric_second_stage()
+    .second_stage_after_small_steps()
+}
+
+/// The Green-Mira kernel (eq. 12-14): the stages of [`tierney_mira_kernel`] with the ghost
+/// `y* = z - (y - x)` on every stream of `layout` ([`LayoutGhost`]).
+#[must_use]
+pub fn green_mira_kernel<C>(
+    layout: PairLayout,
+    p_large: f64,
+    streams: SecondStageStreams<C>,
+) -> DelayedRejection<
+    PairwiseMltProposal,
+    ByState<IndependentSecondStage<OnLayout<PairwiseKelemen>>, C>,
+    LayoutGhost,
+> {
+    DelayedRejection::green_mira(
+        first_stage(layout, p_large),
+        streams.stages(|mask| timid_stage(layout, mask)),
+        LayoutGhost {
+            layout,
+            stream_mask: ALL_STREAMS,
+        },
+    )
+    .with_symmetric_second_stage()
+    .second_stage_after_small_steps()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Picks states whose first stored coordinate is below one half.
+    #[derive(Clone, Copy)]
+    struct LowFirst;
+    impl StageChoice for LowFirst {
+        fn alternate(&self, x: &PssState) -> bool {
+            x.raw_values().first().is_some_and(|&u| u < 0.5)
+        }
+    }
+
+    #[test]
+    fn the_choice_picks_the_stage_and_none_always_picks_normal() {
+        let layout = PairLayout::new(2, &[2, 2]).unwrap();
+        let streams = SecondStageStreams {
+            normal: 0b01,
+            alternate: 0b11,
+            choice: Some(LowFirst),
+        };
+        let second = streams.stages(|mask| orbital_stage(layout, mask));
+        let mut x = PssState::new(2, 1);
+        x.set(0, 0.25);
+        assert_eq!(second.pick(&x).stream_mask, 0b11);
+        x.set(0, 0.75);
+        assert_eq!(second.pick(&x).stream_mask, 0b01);
+        let never = SecondStageStreams {
+            choice: None::<LowFirst>,
+            ..streams
+        };
+        x.set(0, 0.25);
+        assert_eq!(
+            never
+                .stages(|mask| orbital_stage(layout, mask))
+                .pick(&x)
+                .stream_mask,
+            0b01
+        );
+        let all = SecondStageStreams::all().stages(|mask| timid_stage(layout, mask));
+        assert_eq!(all.pick(&x).0.stream_mask, ALL_STREAMS);
+    }
+
+    #[test]
+    fn kernels_skip_the_second_stage_after_large_steps() {
+        let layout = PairLayout::single_stream(4);
+        let o = orbital_kernel(layout, 0.3, SecondStageStreams::all());
+        let t = tierney_mira_kernel(layout, 0.3, SecondStageStreams::all());
+        let g = green_mira_kernel(layout, 0.3, SecondStageStreams::all());
+        assert!(o.runs_second_stage_after(0) && !o.runs_second_stage_after(1));
+        assert!(t.runs_second_stage_after(0) && !t.runs_second_stage_after(1));
+        assert!(g.runs_second_stage_after(0) && !g.runs_second_stage_after(1));
+        assert!(t.has_symmetric_second_stage() && g.has_symmetric_second_stage());
+        assert_eq!(o.first.p_large(), 0.3);
+        assert_eq!(first_stage(layout, 2.0).p_large(), 1.0);
+        let timid = timid_stage(layout, ALL_STREAMS).0.stage.params;
+        let bold = PairwiseKelemenParams::drmlt2020();
+        assert_eq!(timid.r_max, bold.r_max * TIMID_SCALE);
+    }
+}
