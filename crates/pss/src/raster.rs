@@ -41,7 +41,7 @@ pub const RASTER_DEFAULT_PROBABILITY: f64 = 0.5;
 pub struct RasterParams {
     /// Probability that a small step is a raster step instead, in `[0, 1]`. Default 0: off
     /// (the library default; the renderer turns it on for PSSMLT,
-    /// `render::session::raster_mutation_default`).
+    /// `render::methods::PssmltSettings::raster`).
     pub probability: f64,
     /// Smallest displacement, in pixels (default 1).
     pub min_pixels: f64,
