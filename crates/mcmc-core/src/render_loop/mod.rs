@@ -16,7 +16,8 @@
 //!    may be stratified ([`IndependentStates::strata`]).
 //! 3. **Chains in fixed jobs**, each job with its own sink, merged in job order; per-chain RNGs
 //!    seeded from (seed, chain index): under a mutation budget the image is bit-identical for
-//!    any thread count.
+//!    any thread count. A sink may also be a handle to one shared [`ExactSplatGrid`], whose
+//!    sums do not depend on the order of the splats: one image of memory for every job.
 //! 4. **Rounds**: every chain runs `round_mutations` steps, then the controllers' shared
 //!    statistics are pooled in job order and handed back ([`SharedController`]). Time budget,
 //!    cancellation and progress are checked inside rounds, so a cancel takes effect within a
@@ -28,6 +29,7 @@
 //! primary sample space mapped onto a `W x H` image: `W * H`).
 
 mod bootstrap;
+mod exact_grid;
 mod jobs;
 mod large_step_mis;
 mod splat;
@@ -36,6 +38,7 @@ mod splat;
 /// it lives.
 pub use crate::controller::{Both, SharedController};
 pub use bootstrap::{bootstrap_key, ChainAllocation, IndependentStates};
+pub use exact_grid::{ExactSplatGrid, DEFAULT_FRACTION_BITS, EXACT_GRID_BYTES_PER_PIXEL};
 #[cfg(feature = "testing")]
 pub(crate) use large_step_mis::mis_step;
 pub use large_step_mis::LargeStepMis;

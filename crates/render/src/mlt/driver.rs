@@ -146,14 +146,15 @@ impl<'a, T, S> MltDriver<'a, T, S> {
         }
     }
 
-    /// A sink per job: the splats and, with [`MltSettings::stage_map`], the DR stage map.
+    /// The sink of every job: one shared set of layers (the splats and, with
+    /// [`MltSettings::stage_map`], the DR stage map), handed to each job as a clone.
     fn sink(&self) -> impl Fn() -> StagedSplats + Sync {
-        let (w, h, stage_map) = (
+        let staged = StagedSplats::new(
             self.settings.width,
             self.settings.height,
             self.settings.stage_map,
         );
-        move || StagedSplats::new(w, h, stage_map)
+        move || staged.clone()
     }
 
     /// Runs the loop over `states`, with the given normalisation if any.

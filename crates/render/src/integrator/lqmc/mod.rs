@@ -155,14 +155,19 @@ pub struct LqmcOutput {
     pub cancelled: bool,
 }
 
-/// Splat sums of one work unit: its pixels plus the margin its lattice sets can reach;
-/// splats beyond it (sets in the jittered tile that wraps around the image border) are kept
-/// in a list, merged in order.
+/// Splat sums of one work unit, sparse: the splats that land in its pixels plus the margin
+/// its lattice sets can reach, summed per pixel in arrival order when the unit ends
+/// ([`SplatTile::finish`]); splats beyond the margin (sets in the jittered tile that wraps
+/// around the image border) are kept in a list, merged in order. Memory follows the splats
+/// a unit makes, not the area its sets could reach (a dense buffer over the margin would be
+/// a large fraction of the image per unit).
 struct SplatTile {
     buffer: PixelRect,
     width: usize,
     height: usize,
-    sum: Vec<[f64; 3]>,
+    /// Splats inside the buffer as (pixel index, value), in arrival order until
+    /// [`SplatTile::finish`], then one sum per pixel in pixel order.
+    inside: Vec<(u32, [f64; 3])>,
     wrapped: Vec<(usize, [f64; 3])>,
 }
 
@@ -175,24 +180,37 @@ impl SplatTile {
             y1: (rect.y1 + my).min(height),
         };
         Self {
-            sum: vec![[0.0; 3]; buffer.area()],
             buffer,
             width,
             height,
+            inside: Vec::new(),
             wrapped: Vec::new(),
         }
     }
 
-    fn merge_into(&self, width: usize, image: &mut [[f64; 3]]) {
-        let b = self.buffer;
-        let bw = b.x1 - b.x0;
-        for y in b.y0..b.y1 {
-            for x in b.x0..b.x1 {
-                let s = self.sum[(y - b.y0) * bw + (x - b.x0)];
-                let d = &mut image[y * width + x];
-                for c in 0..3 {
-                    d[c] += s[c];
+    /// Sums the inside splats per pixel: a stable sort keeps each pixel's splats in arrival
+    /// order, so every sum is the one a dense buffer would hold.
+    fn finish(&mut self) {
+        self.inside.sort_by_key(|&(i, _)| i);
+        let mut sums: Vec<(u32, [f64; 3])> = Vec::new();
+        for &(i, v) in &self.inside {
+            match sums.last_mut() {
+                Some((j, s)) if *j == i => {
+                    for c in 0..3 {
+                        s[c] += v[c];
+                    }
                 }
+                _ => sums.push((i, v)),
+            }
+        }
+        self.inside = sums;
+    }
+
+    fn merge_into(&self, image: &mut [[f64; 3]]) {
+        for &(i, s) in &self.inside {
+            let d = &mut image[i as usize];
+            for c in 0..3 {
+                d[c] += s[c];
             }
         }
         for &(i, s) in &self.wrapped {
@@ -215,11 +233,8 @@ impl SplatTarget for SplatTile {
             }
             return;
         }
-        let i = (y as usize - b.y0) * (b.x1 - b.x0) + (x as usize - b.x0);
-        let s = &mut self.sum[i];
-        for c in 0..3 {
-            s[c] += v[c];
-        }
+        self.inside
+            .push(((y as usize * self.width + x as usize) as u32, v));
     }
 }
 
@@ -248,6 +263,7 @@ pub fn render_lqmc(
             Explorer::new(scene, &camera, *params, settings.max_depth, settings.seed);
         for s in first..first + count {
             if cancel.load(Ordering::Relaxed) {
+                tile.finish();
                 return ((tile, explorer.stats), false);
             }
             for y in rect.y0..rect.y1 {
@@ -257,6 +273,7 @@ pub fn render_lqmc(
             }
             progress.advance(rect.area() as u64);
         }
+        tile.finish();
         ((tile, explorer.stats), true)
     };
     let mut image = vec![[0.0f64; 3]; w * h];
@@ -278,7 +295,7 @@ pub fn render_lqmc(
                 Some(vec![[0.0f64; 3]; w * h])
             };
             for ((tile, stats), _) in done.iter().flatten() {
-                tile.merge_into(w, pass.as_mut().map_or(&mut image, |p| p.as_mut_slice()));
+                tile.merge_into(pass.as_mut().map_or(&mut image, |p| p.as_mut_slice()));
                 if complete || progressions == 0 {
                     add_stats(&mut totals, stats);
                 }
