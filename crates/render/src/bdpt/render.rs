@@ -6,12 +6,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::{UVec2, Vec2, Vec3};
-use mcmc_core::render_loop::SplatGrid;
+use mcmc_core::render_loop::ExactSplatGrid;
 use mcmc_core::Progress;
 use rayon::prelude::*;
 
 use super::{sample, BdptParams, BdptScratch, SceneRef, StrategySplat, MAX_VERTICES};
-use crate::film::{pixel_sample_position, Film, FilmTile, Filter, PixelRect};
+use crate::film::{exact_splat_grid, pixel_sample_position, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
 use crate::sampler::{IndependentSampler, PixelSampler, Sampler, SamplerKind, SobolSampler};
 
@@ -79,14 +79,16 @@ impl Strategies {
 /// What one band accumulates. Camera-side contributions of a sample are summed and added as
 /// one pixel sample (the pixel's mean over its own samples); light-tracing splats are summed
 /// over the whole image and scaled by pixels / samples at the end (pbrt-v3's splat scale).
-struct Band {
+struct Band<'g> {
     rows: std::ops::Range<usize>,
     camera: FilmTile,
-    light: SplatGrid,
+    /// The light-tracing splats of every band: one shared exact grid (sums independent of
+    /// the order of the splats, so of the thread count).
+    light: &'g ExactSplatGrid,
     /// Per camera-side strategy (only with strategy images).
     strategy_camera: Vec<FilmTile>,
-    /// Per light-tracing strategy (only with strategy images).
-    strategy_light: Vec<SplatGrid>,
+    /// Per light-tracing strategy (only with strategy images), shared like `light`.
+    strategy_light: &'g [ExactSplatGrid],
     /// The current sample's contribution of each camera-side strategy.
     strategy_sums: Vec<Vec3>,
     samples: u64,
@@ -108,7 +110,7 @@ struct Pass<'a> {
     cancel: &'a AtomicBool,
 }
 
-impl Band {
+impl Band<'_> {
     /// Takes sample `pass.index` of every pixel of the band in row-major order; returns false
     /// if `cancel` (checked before every pixel) or the deadline (before every row) stopped it.
     fn render(&mut self, pass: &Pass<'_>) -> bool {
@@ -250,6 +252,16 @@ pub fn render_bdpt_sampled(
         scene.camera().height() as usize,
     );
     let strategies = Strategies::new(params.max_depth);
+    let bound = scene.lights().emission_bound();
+    let light_grid = exact_splat_grid(w, h, bound);
+    let n_light = if strategy_images {
+        strategies.light.len()
+    } else {
+        0
+    };
+    let strategy_light_grids: Vec<ExactSplatGrid> = (0..n_light)
+        .map(|_| exact_splat_grid(w, h, bound))
+        .collect();
     let mut bands: Vec<Band> = (0..BANDS)
         .map(|b| {
             let rows = (b * h / BANDS)..((b + 1) * h / BANDS);
@@ -260,17 +272,17 @@ pub fn render_bdpt_sampled(
                 y1: rows.end,
             };
             let tile = || FilmTile::new(w, h, Filter::BOX, rect);
-            let (n_camera, n_light) = if strategy_images {
-                (strategies.camera.len(), strategies.light.len())
+            let n_camera = if strategy_images {
+                strategies.camera.len()
             } else {
-                (0, 0)
+                0
             };
             Band {
                 rows,
                 camera: tile(),
-                light: SplatGrid::new(w, h),
+                light: &light_grid,
                 strategy_camera: (0..n_camera).map(|_| tile()).collect(),
-                strategy_light: vec![SplatGrid::new(w, h); n_light],
+                strategy_light: &strategy_light_grids,
                 strategy_sums: vec![Vec3::ZERO; n_camera],
                 samples: 0,
                 dropped: 0,
@@ -313,16 +325,17 @@ pub fn render_bdpt_sampled(
     } else {
         (w * h) as f64 / samples as f64
     };
-    let layers = bands.iter().map(|b| (Some(&b.camera), Some(&b.light)));
-    let (image, overflowed) = merge_layers(w, h, light_scale, layers);
+    let tiles = bands.iter().map(|b| &b.camera);
+    let (image, overflowed) = merge_layers(w, h, light_scale, tiles, Some(&light_grid));
     let strategy_images = if strategy_images {
         let camera = strategies.camera.iter().enumerate().map(|(i, &st)| {
-            let layers = bands.iter().map(|b| (Some(&b.strategy_camera[i]), None));
-            (st, merge_layers(w, h, light_scale, layers).0)
+            let tiles = bands.iter().map(|b| &b.strategy_camera[i]);
+            (st, merge_layers(w, h, light_scale, tiles, None).0)
         });
         let light = strategies.light.iter().enumerate().map(|(i, &st)| {
-            let layers = bands.iter().map(|b| (None, Some(&b.strategy_light[i])));
-            (st, merge_layers(w, h, light_scale, layers).0)
+            let tiles = std::iter::empty();
+            let grid = Some(&strategy_light_grids[i]);
+            (st, merge_layers(w, h, light_scale, tiles, grid).0)
         });
         let mut all: Vec<((u8, u8), Image)> = camera
             .chain(light)
@@ -343,23 +356,22 @@ pub fn render_bdpt_sampled(
     }
 }
 
-/// The image of the bands' layers, merged in band order: the mean of the camera tiles' pixel
-/// samples plus `light_scale` times the light grids' sums; with the number of pixels dropped
-/// because they overflow f32 ([`Film::image_checked`]).
+/// The image of the bands' camera tiles, merged in band order (the mean of the pixel
+/// samples), plus `light_scale` times the shared light grid's sums; with the number of pixels
+/// dropped because they overflow f32 ([`Film::image_checked`]).
 fn merge_layers<'a>(
     w: usize,
     h: usize,
     light_scale: f64,
-    bands: impl Iterator<Item = (Option<&'a FilmTile>, Option<&'a SplatGrid>)>,
+    tiles: impl Iterator<Item = &'a FilmTile>,
+    light: Option<&ExactSplatGrid>,
 ) -> (Image, u64) {
     let mut film = Film::new(w, h, Filter::BOX);
-    for (camera, splats) in bands {
-        if let Some(tile) = camera {
-            film.merge_tile(tile);
-        }
-        if let Some(grid) = splats {
-            film.merge_splats(grid);
-        }
+    for tile in tiles {
+        film.merge_tile(tile);
+    }
+    if let Some(grid) = light {
+        film.merge_exact_splats(grid);
     }
     film.image_checked(light_scale)
 }

@@ -128,6 +128,26 @@ impl EnvironmentLight {
         self.mean_luminance
     }
 
+    /// The largest radiance component over all directions (the map's brightest finite texel
+    /// times the multiplier, or the constant's largest channel).
+    #[must_use]
+    pub fn max_radiance(&self) -> f32 {
+        let scale = self.scale.max_element();
+        match &self.map {
+            None => scale,
+            Some(map) => {
+                let texel = map
+                    .pixels
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|c| c.is_finite())
+                    .fold(0.0f32, f32::max);
+                texel * scale
+            }
+        }
+    }
+
     /// True for a constant environment.
     #[must_use]
     pub fn is_constant(&self) -> bool {
