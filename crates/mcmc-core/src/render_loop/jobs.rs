@@ -26,6 +26,9 @@ pub(crate) struct Job<'t, T: Target, K, C, Sk> {
     pub(crate) sink: Sk,
     pub(crate) dropped: u64,
     pub(crate) non_finite: u64,
+    /// Another shard's job run only for the pooled statistics of coupled controllers
+    /// ([`super::Shard`]): its chains step without splatting.
+    pub(crate) muted: bool,
 }
 
 impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
@@ -36,6 +39,34 @@ impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
             sink,
             dropped: 0,
             non_finite: 0,
+            muted: false,
+        }
+    }
+}
+
+/// One round of a muted job's chains: the same steps as an unmuted job, no splats, no
+/// progress (the shard that owns them reports these mutations).
+fn step_muted<T, K, C>(
+    chains: &mut [(Chain<'_, T, K, C, ChainRng>, u64)],
+    round: u64,
+    stop: &(impl Fn() -> bool + Sync),
+) where
+    T: Target,
+    K: Kernel<T>,
+    C: Controller<K, T::State>,
+{
+    'chains: for (chain, remaining) in chains.iter_mut() {
+        let mut left = round.min(*remaining);
+        while left > 0 {
+            if stop() {
+                break 'chains;
+            }
+            let n = left.min(POLL_EVERY);
+            for _ in 0..n {
+                let _ = chain.step(&mut ());
+            }
+            left -= n;
+            *remaining -= n;
         }
     }
 }
@@ -80,7 +111,12 @@ where
                 sink,
                 dropped,
                 non_finite,
+                muted,
             } = job;
+            if *muted {
+                step_muted(chains, round, &stop);
+                return;
+            }
             let mut observer = SplatObserver::new(sink);
             'chains: for ((chain, remaining), &weight) in chains.iter_mut().zip(weights.iter()) {
                 observer.set_weight(weight);

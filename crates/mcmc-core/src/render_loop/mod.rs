@@ -101,6 +101,48 @@ pub struct LoopSettings {
     /// pbrt's scheme; [`ChainAllocation::PerTarget`]: a fixed count per target, each target's
     /// splats scaled by `b_d / n_d`).
     pub chain_allocation: ChainAllocation,
+    /// Which part of the fixed job list this run renders (default [`Shard::WHOLE`]): see
+    /// [`Shard`].
+    pub shard: Shard,
+}
+
+/// A part of a render split over processes: shard `index` of `count` owns the contiguous
+/// run of jobs `j` with `j * count / jobs == index`. Every shard draws the same bootstrap and
+/// chain starts (they depend only on the seed); a shard runs only its own jobs' chains, or,
+/// when the controllers couple the chains ([`SharedController::COUPLES_CHAINS`]), every chain
+/// with only its own jobs' splats kept, so the pooled statistics are those of the whole
+/// render. Its sink then holds exactly its jobs' splats and [`LoopOutput::mutations`] counts
+/// exactly its jobs' mutations: with an order-independent sink ([`ExactSplatGrid`]) the sums
+/// of all shards' sinks and mutation counts are bit for bit those of the whole render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This part, `0..count`.
+    pub index: u32,
+    /// Number of parts, at least 1.
+    pub count: u32,
+}
+
+impl Shard {
+    /// The whole render (shard 0 of 1).
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+
+    /// True if work unit `unit` of `units` belongs to this shard.
+    #[must_use]
+    pub fn owns(&self, unit: usize, units: usize) -> bool {
+        units == 0 || (unit as u64 * u64::from(self.count) / units as u64) == u64::from(self.index)
+    }
+
+    /// True for [`Shard::WHOLE`] (or any one-part split).
+    #[must_use]
+    pub fn is_whole(&self) -> bool {
+        self.count == 1
+    }
+}
+
+impl Default for Shard {
+    fn default() -> Self {
+        Self::WHOLE
+    }
 }
 
 impl Default for LoopSettings {
@@ -115,6 +157,7 @@ impl Default for LoopSettings {
             bootstrap_time_share: 0.25,
             large_step_mis: false,
             chain_allocation: ChainAllocation::Joint,
+            shard: Shard::WHOLE,
         }
     }
 }
@@ -156,6 +199,13 @@ impl LoopSettings {
             ">= 1",
         )?;
         range("jobs", self.jobs as f64, 1.0, 4096.0, "1..=4096")?;
+        if self.shard.count == 0 || self.shard.index >= self.shard.count {
+            return Err(McmcError::InvalidParameter {
+                name: "shard",
+                value: f64::from(self.shard.index),
+                allowed: "index in 0..count, count >= 1",
+            });
+        }
         if !(self.bootstrap_time_share > 0.0 && self.bootstrap_time_share <= 1.0) {
             return Err(McmcError::InvalidParameter {
                 name: "bootstrap_time_share",
@@ -531,10 +581,13 @@ where
         }
         let n_jobs = settings.jobs.min(chains);
         let mut skipped = 0usize;
+        let shard = settings.shard;
         let mut job_list: Vec<jobs::Job<'_, T, K, C, Sk>> = (0..n_jobs)
+            .filter(|&j| shard.owns(j, n_jobs) || C::COUPLES_CHAINS)
             .map(|j| {
                 let (lo, hi) = (j * chains / n_jobs, (j + 1) * chains / n_jobs);
                 let mut job = jobs::Job::new((self.sink)());
+                job.muted = !shard.owns(j, n_jobs);
                 for c in lo..hi {
                     let (target, index) = boot.starts[c];
                     let slot = ChainSlot {
@@ -580,7 +633,7 @@ where
         out.shared = summary.shared;
         out.chains_time = chains_start.elapsed();
         out.first_round_time = summary.first_round;
-        for job in &job_list {
+        for job in job_list.iter().filter(|j| !j.muted) {
             out.sink.merge(&job.sink);
             out.dropped_splats += job.dropped;
             out.non_finite += job.non_finite;
