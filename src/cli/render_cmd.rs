@@ -14,7 +14,7 @@ use render::{IntegratorKind, INTEGRATORS};
 use super::integrator::IntegratorChoice;
 use super::method_flags::MethodFlags;
 use super::progress::BarProgress;
-use super::{parse, CliResult};
+use super::{parse, shard_cmd, CliResult};
 
 /// The largest `--width` / `--height`.
 const MAX_SIDE: u32 = 16_384;
@@ -90,6 +90,11 @@ pub(crate) struct RenderArgs {
     /// Multiplier of the environment's radiance, 0..=1e6.
     #[arg(long, allow_negative_numbers = true, value_name = "S", default_value = "1", requires = "env", value_parser = parse::env_strength)]
     env_strength: f32,
+    /// Render only shard K of N (0 <= K < N <= 4096) of the fixed work list and write its
+    /// accumulators to `--output` (a .clpart file); `chainlight merge` adds the N parts up to
+    /// the image one process would render (bit-identical under --spp). docs/cluster.md.
+    #[arg(long, value_name = "K/N", value_parser = shard_cmd::parse_shard)]
+    shard: Option<render::shard::Shard>,
 }
 
 /// The default `--spp`.
@@ -191,7 +196,16 @@ fn settings(args: &RenderArgs) -> CliResult<RenderSettings> {
 
 /// Renders, writes the EXR and the PNG preview, prints a summary.
 pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
-    let png_path = check_paths(&args)?;
+    let png_path = match args.shard {
+        Some(_) => {
+            shard_cmd::check_part_path(&args.output)?;
+            if args.method.strategy_images {
+                return Err("--strategy-images cannot be combined with --shard (a part holds only the image's accumulators)".into());
+            }
+            args.output.with_extension("png")
+        }
+        None => check_paths(&args)?,
+    };
     let settings = settings(&args)?;
 
     let mut scene = match &args.scene {
@@ -249,11 +263,34 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
         args.integrator.info.name,
         settings.threads
     );
-    let output = session::render(&scene, &settings, &progress, &CANCEL);
+    let shard = args.shard.unwrap_or(render::shard::Shard::WHOLE);
+    let output = session::render_shard(&scene, &settings, shard, &progress, &CANCEL);
     progress.finish();
     let output = output?;
     for note in &output.notes {
         eprintln!("note: {note}");
+    }
+    if let Some(shard) = args.shard {
+        let environment = format!(
+            "{:?} rotate {} strength {}",
+            args.env, args.env_rotate, args.env_strength
+        );
+        let identity = shard_cmd::scene_identity(args.scene.as_deref(), &environment)?;
+        shard_cmd::write_render_part(
+            &args.output,
+            &settings,
+            args.integrator.info.name,
+            identity,
+            shard,
+            &output,
+        )?;
+        println!(
+            "wrote       {} (shard {}/{}; merge the parts with `chainlight merge`)",
+            args.output.display(),
+            shard.index,
+            shard.count
+        );
+        return Ok(());
     }
     if args.method.strategy_images && settings.integrator() != IntegratorKind::Bdpt {
         eprintln!("warning: --strategy-images applies to --integrator bdpt only; ignored");

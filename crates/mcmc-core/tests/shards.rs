@@ -7,11 +7,11 @@
 
 use std::sync::atomic::AtomicBool;
 
+use mcmc_core::proposal::Scaled;
 use mcmc_core::render_loop::{
     ExactSplatGrid, IndependentStates, LoopBudget, LoopSettings, RenderLoop, Shard,
     SharedController, Splat, SplatGrid, SplatSink,
 };
-use mcmc_core::proposal::Scaled;
 use mcmc_core::tunable::ScaleTunable;
 use mcmc_core::{Controller, GaussianRandomWalk, Mh, NoAdaptation, NoProgress, StepInfo, Target};
 
@@ -153,7 +153,11 @@ where
     for index in (0..count).rev() {
         let part = ExactSplatGrid::new(8, 1);
         let (n, b) = run_into(&part, Shard { index, count }, controller);
-        assert_eq!(b.to_bits(), b_whole.to_bits(), "every shard draws the same bootstrap");
+        assert_eq!(
+            b.to_bits(),
+            b_whole.to_bits(),
+            "every shard draws the same bootstrap"
+        );
         assert!(n < n_whole || count == 1);
         n_sum += n;
         assert!(sum.add_grid(&part));

@@ -291,6 +291,45 @@ impl Film {
         }
     }
 
+    /// A film holding given pixel-sample sums (`Σ w L` and `Σ w` per pixel, row-major; e.g.
+    /// read back from a partial render), no splats; `None` if the lengths are not
+    /// `width * height`.
+    #[must_use]
+    pub fn from_sums(
+        width: usize,
+        height: usize,
+        filter: Filter,
+        sum: Vec<[f64; 3]>,
+        weight: Vec<f64>,
+    ) -> Option<Self> {
+        let n = width * height;
+        (sum.len() == n && weight.len() == n).then(|| Self {
+            sum,
+            weight,
+            ..Self::new_empty(width, height, filter)
+        })
+    }
+
+    fn new_empty(width: usize, height: usize, filter: Filter) -> Self {
+        Self {
+            width,
+            height,
+            filter,
+            sum: Vec::new(),
+            weight: Vec::new(),
+            splat: None,
+            samples: 0,
+            splats: 0,
+            nonfinite: 0,
+        }
+    }
+
+    /// The pixel-sample sums: `Σ w L` and `Σ w` per pixel, row-major.
+    #[must_use]
+    pub fn sums(&self) -> (&[[f64; 3]], &[f64]) {
+        (&self.sum, &self.weight)
+    }
+
     /// Width in pixels.
     #[must_use]
     pub fn width(&self) -> usize {

@@ -60,6 +60,7 @@ pub mod pathspace_scene;
 pub mod sampler;
 pub mod scene;
 pub mod session;
+pub mod shard;
 #[cfg(test)]
 mod test_util;
 pub mod warp;

@@ -145,17 +145,28 @@ impl ExactSplatGrid {
         if !(x >= 0.0 && y >= 0.0 && (x as usize) < self.width && (y as usize) < self.height) {
             return false;
         }
+        let i = y as usize * self.width + x as usize;
+        self.add_f64(i, rgb.map(|c| f64::from(c) * weight))
+    }
+
+    /// Adds f64 values to pixel index `i` (row-major), each rounded to the grid's resolution
+    /// as a splat is; returns false (adding nothing) for an index outside the grid or a
+    /// non-finite or too large value.
+    #[inline]
+    pub fn add_f64(&self, i: usize, v: [f64; 3]) -> bool {
+        if i >= self.cells.len() {
+            return false;
+        }
         let mut fixed = [0i128; 3];
-        for (f, &c) in fixed.iter_mut().zip(&rgb) {
-            match self.fixed(f64::from(c) * weight) {
-                Some(v) => *f = v,
+        for (f, &c) in fixed.iter_mut().zip(&v) {
+            match self.fixed(c) {
+                Some(x) => *f = x,
                 None => return false,
             }
         }
-        let px = &self.cells[y as usize * self.width + x as usize];
-        for (cell, v) in px.iter().zip(fixed) {
-            if v != 0 {
-                cell.add(v);
+        for (cell, x) in self.cells[i].iter().zip(fixed) {
+            if x != 0 {
+                cell.add(x);
             }
         }
         true
@@ -230,6 +241,17 @@ impl ExactSplatGrid {
             })
             .collect();
         (pixels, dropped)
+    }
+}
+
+impl Clone for ExactSplatGrid {
+    /// A grid with the same size, resolution and sums (read them after the writers are done).
+    fn clone(&self) -> Self {
+        let copy = Self::with_fraction_bits(self.width, self.height, self.fraction_bits);
+        for i in 0..self.cells.len() {
+            copy.add_raw(i, self.raw(i));
+        }
+        copy
     }
 }
 

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::{UVec2, Vec2, Vec3};
-use mcmc_core::render_loop::ExactSplatGrid;
+use mcmc_core::render_loop::{ExactSplatGrid, Shard};
 use mcmc_core::Progress;
 use rayon::prelude::*;
 
@@ -14,6 +14,7 @@ use super::{sample, BdptParams, BdptScratch, SceneRef, StrategySplat, MAX_VERTIC
 use crate::film::{exact_splat_grid, pixel_sample_position, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
 use crate::sampler::{IndependentSampler, PixelSampler, Sampler, SamplerKind, SobolSampler};
+use crate::shard::Component;
 
 /// Number of fixed row bands (work units): the image does not depend on the thread count.
 const BANDS: usize = 8;
@@ -33,6 +34,8 @@ pub struct BdptOutput {
     pub cancelled: bool,
     /// MIS-weighted image of each strategy `(s, t)` (only if requested); they sum to `image`.
     pub strategy_images: Vec<((u8, u8), Image)>,
+    /// A shard's accumulators ([`render_bdpt_shard`]; `None` for the whole image).
+    pub component: Option<Component>,
 }
 
 /// The strategies `(s, t)` that can contribute at a maximum depth, split by where their
@@ -246,6 +249,35 @@ pub fn render_bdpt_sampled(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> BdptOutput {
+    render_bdpt_shard(
+        scene,
+        params,
+        sampler,
+        (spp, time),
+        seed,
+        strategy_images,
+        Shard::WHOLE,
+        progress,
+        cancel,
+    )
+}
+
+/// [`render_bdpt_sampled`] rendering only the row bands of shard `shard` (`budget` is
+/// `(spp, time)`); the output's [`BdptOutput::component`] holds the shard's accumulators when
+/// the shard is not the whole image ([`crate::shard`]).
+#[allow(clippy::too_many_arguments)]
+pub fn render_bdpt_shard(
+    scene: SceneRef<'_>,
+    params: &BdptParams,
+    sampler: SamplerKind,
+    budget: (Option<u32>, Option<Duration>),
+    seed: u64,
+    strategy_images: bool,
+    shard: Shard,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> BdptOutput {
+    let (spp, time) = budget;
     let start = Instant::now();
     let (w, h) = (
         scene.camera().width() as usize,
@@ -311,7 +343,11 @@ pub fn render_bdpt_sampled(
         if pass.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        let complete: Vec<bool> = bands.par_iter_mut().map(|b| b.render(&pass)).collect();
+        let complete: Vec<bool> = bands
+            .par_iter_mut()
+            .enumerate()
+            .map(|(i, b)| !shard.owns(i, BANDS) || b.render(&pass))
+            .collect();
         stopped = complete.contains(&false) || cancel.load(Ordering::Relaxed);
         if complete.iter().all(|&c| c) {
             done += 1;
@@ -327,6 +363,19 @@ pub fn render_bdpt_sampled(
     };
     let tiles = bands.iter().map(|b| &b.camera);
     let (image, overflowed) = merge_layers(w, h, light_scale, tiles, Some(&light_grid));
+    let component = (!shard.is_whole()).then(|| {
+        let mut film = Film::new(w, h, Filter::BOX);
+        for band in &bands {
+            film.merge_tile(&band.camera);
+        }
+        let (sum, weight) = film.sums();
+        Component::Film {
+            sum: sum.to_vec(),
+            weight: weight.to_vec(),
+            light: Some(light_grid.clone()),
+            light_samples: samples,
+        }
+    });
     let strategy_images = if strategy_images {
         let camera = strategies.camera.iter().enumerate().map(|(i, &st)| {
             let tiles = bands.iter().map(|b| &b.strategy_camera[i]);
@@ -353,6 +402,7 @@ pub fn render_bdpt_sampled(
         dropped: bands.iter().map(|b| b.dropped).sum::<u64>() + overflowed,
         cancelled,
         strategy_images,
+        component,
     }
 }
 

@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::UVec2;
+use mcmc_core::render_loop::Shard;
 use mcmc_core::Progress;
 use rayon::prelude::*;
 
@@ -41,6 +42,9 @@ pub struct PtDriverSettings {
     /// ([`pt::li_with`]); `None` turns it off. The usual value is [`pt::ROULETTE_DEPTH`]. (LQMC
     /// builds its paths itself and ignores it.)
     pub roulette: Option<u32>,
+    /// The part of the fixed tile list to render ([`Shard::WHOLE`]: all of it): shard `k`
+    /// of `n` renders the tiles `i` with `i * n / tiles == k` ([`crate::shard`]).
+    pub shard: Shard,
 }
 
 /// The result of [`render_pt`].
@@ -54,6 +58,8 @@ pub struct PtOutput {
     pub dropped_nonfinite: u64,
     /// True if `cancel` stopped the render early.
     pub cancelled: bool,
+    /// The pixel-sample sums the image was made from (a shard's part of a render).
+    pub film: Film,
 }
 
 /// Renders `scene` with unidirectional path tracing at `settings.width x settings.height`,
@@ -156,6 +162,7 @@ where
         settings.width,
         settings.height,
         settings.budget,
+        settings.shard,
         progress,
         cancel,
         render_tile,
@@ -171,6 +178,7 @@ where
         samples: film.samples,
         dropped_nonfinite: film.nonfinite + overflowed,
         cancelled,
+        film,
     }
 }
 
@@ -186,10 +194,12 @@ where
 /// [`render_pt`]: doubling up to a sixteenth of a sample budget, or one sample per pixel until
 /// the time budget is spent (the first pass always runs). Progress is in pixel samples; the
 /// tile reports its own progress.
+#[allow(clippy::too_many_arguments)]
 pub fn render_passes<R, F, M>(
     width: u32,
     height: u32,
     budget: Budget,
+    shard: Shard,
     progress: &dyn Progress,
     cancel: &AtomicBool,
     render_tile: F,
@@ -202,8 +212,16 @@ where
 {
     let start = Instant::now();
     let (w, h) = (width as usize, height as usize);
-    let work = tiles(w, h, TILE_SIZE);
-    let pixels = (w * h) as u64;
+    let all = tiles(w, h, TILE_SIZE);
+    let units = all.len();
+    // Another shard's tiles: `None` results, as tiles a time budget skipped.
+    let mine: Vec<bool> = (0..units).map(|i| shard.owns(i, units)).collect();
+    let work: Vec<(PixelRect, bool)> = all.into_iter().zip(mine).collect();
+    let pixels = work
+        .iter()
+        .filter(|(_, mine)| *mine)
+        .map(|(rect, _)| rect.area() as u64)
+        .sum::<u64>();
     let mut cancelled = false;
     match budget {
         Budget::SamplesPerPixel(spp) => {
@@ -211,7 +229,7 @@ where
             for (first, count) in passes(spp) {
                 let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
-                    .map(|&rect| Some(render_tile(rect, first, count)))
+                    .map(|&(rect, mine)| mine.then(|| render_tile(rect, first, count)))
                     .collect();
                 cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
                 end_pass(first, count, done);
@@ -226,9 +244,9 @@ where
             loop {
                 let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
-                    .map(|&rect| {
+                    .map(|&(rect, mine)| {
                         let late = pass > 0 && Instant::now() >= deadline;
-                        (!late).then(|| render_tile(rect, pass, 1))
+                        (mine && !late).then(|| render_tile(rect, pass, 1))
                     })
                     .collect();
                 cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
@@ -281,6 +299,7 @@ mod tests {
             seed: 1,
             sampler: SamplerKind::Independent,
             roulette: Some(pt::ROULETTE_DEPTH),
+            shard: Shard::WHOLE,
         }
     }
 

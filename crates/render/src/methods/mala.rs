@@ -109,7 +109,9 @@ impl Method for MalaSettings {
     ) -> Result<RenderOutput, RenderError> {
         let params = bdpt_params(common, BdptParams::default().roulette);
         let mut notes = emitter_notes(scene);
-        let mlt_settings = self.chain.mlt_settings(common, PATH_STREAMS, false);
+        let mlt_settings = self
+            .chain
+            .mlt_settings(common, PATH_STREAMS, false, run.shard);
         notes.push(mala_note(&self.config));
         let out = mala::render(
             scene,

@@ -93,7 +93,9 @@ impl Method for MmltSettings {
         let (w, h) = (common.width, common.height);
         let mut notes = emitter_notes(scene);
         let kernel = PssKernel::new(self.chain.small_step, &self.raster, w, h);
-        let mlt_settings = self.chain.mlt_settings(common, PATH_STREAMS, false);
+        let mlt_settings = self
+            .chain
+            .mlt_settings(common, PATH_STREAMS, false, run.shard);
         let estimator = MltEstimator {
             large_step_mis: self.large_step_mis,
             chain_allocation: self.chain_allocation,

@@ -98,6 +98,7 @@ impl Method for PathMltSettings {
             seed: common.seed,
             streams: 1,
             stage_map: false,
+            shard: run.shard,
         };
         let mut params = adapt_params(self.adapt, &mlt_settings);
         if self.adapt == PathAdapt::Quadtree {
