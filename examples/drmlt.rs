@@ -84,7 +84,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let toy = toy(&plan.out, !args.no_toy)?;
     if args.no_scenes {
         println!("{toy}");
-        return Ok(std::fs::write(plan.out.join("results.md"), toy)?);
+        return Ok(render::files::write_bytes_atomic(
+            plan.out.join("results.md"),
+            toy,
+        )?);
     }
     if args.stats_only {
         (plan.regime, plan.seeds, plan.report) = (Regime::EqualSamples(16), vec![7], false);

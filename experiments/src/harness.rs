@@ -13,7 +13,7 @@ use crate::load::{describe, LoadAverage};
 use crate::method::{Method, RunContext};
 use crate::plan::Plan;
 use crate::record::RunRecord;
-use crate::report::{current_commit, ConvergencePoint};
+use crate::report::{ConvergencePoint, BUILD_COMMIT};
 use crate::results::Results;
 use crate::rundir::{scene_manifest, RunDirectory};
 use crate::scene::{load_bundled, SceneCase};
@@ -153,7 +153,7 @@ impl<'a> Experiment<'a> {
         self.validate()?;
         let started = Instant::now();
         let load_before = LoadAverage::read();
-        let commit = current_commit(".");
+        let commit = BUILD_COMMIT.to_string();
         let cases = self.load_cases()?;
         let dirs = cases
             .iter()

@@ -9,6 +9,7 @@ use render::image_io;
 use render::session::{Budget, RenderOutput, RenderSettings};
 use render::shard::{read_part, write_part, PartHeader, Partial, Shard, PART_EXTENSION};
 
+use super::outputs::{self, Named};
 use super::CliResult;
 
 /// Parses `--shard K/N`: `0 <= K < N`, `1 <= N <= 4096`.
@@ -25,13 +26,14 @@ pub(crate) fn parse_shard(s: &str) -> Result<Shard, String> {
     Ok(Shard { index, count })
 }
 
-/// Refuses an output path that is not a `.clpart` file.
-pub(crate) fn check_part_path(output: &Path) -> CliResult<()> {
+/// Refuses an output path that is not a writable `.clpart` file or that is one of `inputs`
+/// (the scene, the environment map).
+pub(crate) fn check_part_path(output: &Path, inputs: &[Named]) -> CliResult<()> {
     let ok = output
         .extension()
         .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case(PART_EXTENSION));
     if ok {
-        Ok(())
+        outputs::check(&[Named::new("--output", output)], inputs)
     } else {
         Err(format!(
             "--output with --shard must name a .{PART_EXTENSION} file (a partial result for `chainlight merge`), got '{}'",
@@ -113,17 +115,17 @@ pub(crate) fn run(args: MergeArgs) -> CliResult<()> {
         )
         .into());
     }
+    let png = args.output.with_extension("png");
+    let inputs: Vec<Named> = args.parts.iter().map(|p| Named::new("PART", p)).collect();
+    outputs::check(
+        &[
+            Named::new("--output", &args.output),
+            Named::new("the PNG preview", &png),
+        ],
+        &inputs,
+    )?;
     let mut parts: Vec<(PathBuf, PartHeader, Partial)> = Vec::new();
     for path in &args.parts {
-        if let Ok(canonical) = std::fs::canonicalize(&args.output) {
-            if std::fs::canonicalize(path).is_ok_and(|p| p == canonical) {
-                return Err(format!(
-                    "--output '{}' is also an input part: refusing to overwrite it",
-                    args.output.display()
-                )
-                .into());
-            }
-        }
         let (header, partial) = read_part(path)?;
         parts.push((path.clone(), header, partial));
     }
@@ -179,7 +181,6 @@ pub(crate) fn run(args: MergeArgs) -> CliResult<()> {
         eprintln!("note: {dropped} pixel(s) exceed the largest f32 value and were written black");
     }
     image_io::write_exr(&args.output, &image)?;
-    let png = args.output.with_extension("png");
     image_io::write_png(&png, &image, args.exposure)?;
     println!(
         "merged      {count} parts of {} ({})",

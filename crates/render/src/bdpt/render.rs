@@ -79,6 +79,19 @@ impl Strategies {
     }
 }
 
+/// The strategies `(s, t)` whose images [`render_bdpt`] returns with `strategy_images` at
+/// maximum depth `max_depth` (camera-side strategies first, then light tracing): what a caller
+/// writing them can check up front.
+#[must_use]
+pub fn strategy_list(max_depth: u32) -> Vec<(u8, u8)> {
+    let strategies = Strategies::new(max_depth);
+    strategies
+        .camera
+        .into_iter()
+        .chain(strategies.light)
+        .collect()
+}
+
 /// What one band accumulates. Camera-side contributions of a sample are summed and added as
 /// one pixel sample (the pixel's mean over its own samples); light-tracing splats are summed
 /// over the whole image and scaled by pixels / samples at the end (pbrt-v3's splat scale).

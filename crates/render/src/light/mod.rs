@@ -26,7 +26,7 @@ use glam::{Vec2, Vec3, Vec3A};
 
 pub use area::{collect as collect_area_lights, AreaLight, Emission};
 pub use distribution::{Distribution1D, Distribution2D};
-pub use environment::{EnvironmentLight, EnvironmentSample};
+pub use environment::{DroppedTexels, EnvironmentLight, EnvironmentSample};
 pub use punctual::{PunctualKind, PunctualLight};
 
 use crate::frame::Frame;

@@ -6,7 +6,7 @@
 //! pixel sums; a fraction-bit count and 128-bit fixed-point splat sums; the counts); the
 //! FNV-1a 64 hash of every byte before it.
 
-use std::io::{Read, Write};
+use std::io::Read;
 use std::path::Path;
 
 use mcmc_core::render_loop::{ExactSplatGrid, Shard};
@@ -120,8 +120,8 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
-/// Writes `partial` with `header` to `path` (through a temporary file in the same folder,
-/// renamed into place: an interrupted write never leaves a truncated part).
+/// Writes `partial` with `header` to `path` (atomically: `crate::files::write_bytes_atomic`;
+/// an interrupted write never leaves a truncated part).
 ///
 /// # Errors
 /// The I/O error, with the path.
@@ -175,17 +175,8 @@ pub fn write_part(path: &Path, header: &PartHeader, partial: &Partial) -> Result
     }
     let hash = fnv1a(&buf);
     buf.extend_from_slice(&hash.to_le_bytes());
-    let name = path
-        .file_name()
-        .map_or_else(|| "part".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let result = std::fs::File::create(&tmp)
-        .and_then(|mut f| f.write_all(&buf).and_then(|()| f.sync_all()))
-        .and_then(|()| std::fs::rename(&tmp, path));
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(format!("cannot write part '{}': {e}", path.display()));
-    }
+    crate::files::write_bytes_atomic(path, &buf)
+        .map_err(|e| format!("cannot write part '{}': {e}", path.display()))?;
     Ok(())
 }
 
@@ -256,20 +247,15 @@ impl Reader<'_> {
 /// checksum), a size out of range. Only regular files are read.
 pub fn read_part(path: &Path) -> Result<(PartHeader, Partial), String> {
     let fail = |why: String| format!("part '{}': {why}", path.display());
-    let meta = std::fs::metadata(path).map_err(|e| fail(e.to_string()))?;
-    if !meta.is_file() {
-        return Err(fail("not a regular file".into()));
-    }
+    let file = crate::files::open_regular(path).map_err(|e| fail(e.to_string()))?;
+    let len = file.metadata().map_err(|e| fail(e.to_string()))?.len();
     let limit = 64 + MAX_HEADER + (MAX_SIDE * MAX_SIDE * 4 * 8) as u64 * 4;
-    if meta.len() > limit {
-        return Err(fail(format!(
-            "{} bytes is larger than any part",
-            meta.len()
-        )));
+    if len > limit {
+        return Err(fail(format!("{len} bytes is larger than any part")));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    std::fs::File::open(path)
-        .and_then(|f| f.take(limit).read_to_end(&mut bytes))
+    let mut bytes = Vec::with_capacity(len as usize);
+    file.take(limit)
+        .read_to_end(&mut bytes)
         .map_err(|e| fail(e.to_string()))?;
     parse(&bytes).map_err(fail)
 }
