@@ -92,10 +92,10 @@ pub(crate) struct RenderArgs {
     /// Multiplier of the environment's radiance, 0..=1e6.
     #[arg(long, allow_negative_numbers = true, value_name = "S", default_value = "1", requires = "env", value_parser = parse::env_strength)]
     env_strength: f32,
-    /// Render only shard K of N (0 <= K < N <= 4096) of the fixed work list and write its
+    /// Render only shard K of N (0 <= K < N, 2 <= N <= 4096) of the fixed work list and write its
     /// accumulators to `--output` (a .clpart file); `chainlight merge` adds the N parts up to
     /// the image one process would render (bit-identical under --spp). docs/cluster.md.
-    #[arg(long, value_name = "K/N", value_parser = shard_cmd::parse_shard)]
+    #[arg(long, allow_negative_numbers = true, value_name = "K/N", value_parser = shard_cmd::parse_shard)]
     shard: Option<render::shard::Shard>,
 }
 

@@ -12,15 +12,15 @@ use render::shard::{read_part, write_part, PartHeader, Partial, Shard, PART_EXTE
 use super::outputs::{self, Named};
 use super::CliResult;
 
-/// Parses `--shard K/N`: `0 <= K < N`, `1 <= N <= 4096`.
+/// Parses `--shard K/N`: `0 <= K < N`, `2 <= N <= 4096` (one part is the plain render).
 pub(crate) fn parse_shard(s: &str) -> Result<Shard, String> {
-    let bad = || format!("'{s}' is not K/N with 0 <= K < N <= 4096 (e.g. 0/4)");
+    let bad = || format!("'{s}' is not K/N with 0 <= K < N and 2 <= N <= 4096 (e.g. 0/4)");
     let (k, n) = s.split_once('/').ok_or_else(bad)?;
     let (index, count): (u32, u32) = (
         k.trim().parse().map_err(|_| bad())?,
         n.trim().parse().map_err(|_| bad())?,
     );
-    if count == 0 || count > 4096 || index >= count {
+    if !(2..=4096).contains(&count) || index >= count {
         return Err(bad());
     }
     Ok(Shard { index, count })
