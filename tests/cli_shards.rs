@@ -72,8 +72,14 @@ fn every_integrator_merges_bit_identically() {
         let merged = dir.join("merged.exr");
         let o = merge(&parts, &merged);
         assert!(o.status.success(), "{integrator}: {}", stderr(&o));
-        let (a, b) = (std::fs::read(&whole).unwrap(), std::fs::read(&merged).unwrap());
-        assert!(a == b, "{integrator}: the merged EXR differs from the single-process one");
+        let (a, b) = (
+            std::fs::read(&whole).unwrap(),
+            std::fs::read(&merged).unwrap(),
+        );
+        assert!(
+            a == b,
+            "{integrator}: the merged EXR differs from the single-process one"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 }
@@ -86,12 +92,19 @@ fn the_comparison_sees_a_different_render() {
     let dir = temp_dir("shards-negative");
     let whole = render(&dir, "pssmlt", &[], "whole.exr");
     let other = render(&dir, "pssmlt", &["--seed", "6"], "other.exr");
-    assert_ne!(std::fs::read(&whole).unwrap(), std::fs::read(&other).unwrap());
+    assert_ne!(
+        std::fs::read(&whole).unwrap(),
+        std::fs::read(&other).unwrap()
+    );
     let part = shards(&dir, "pssmlt", &[], 2);
     let half = dir.join("half.exr");
     let o = merge(&part[..1], &half);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("missing shard(s) 1/2"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("missing shard(s) 1/2"),
+        "{}",
+        stderr(&o)
+    );
     assert!(!half.exists());
     std::fs::remove_dir_all(&dir).ok();
 }
