@@ -18,9 +18,12 @@ use crate::ChainRng;
 /// Mutations between two checks of the cancel flag and the deadline.
 const POLL_EVERY: u64 = 64;
 
+/// A chain of a job with its remaining mutations.
+pub(crate) type JobChain<'t, T, K, C> = (Chain<'t, T, K, C, ChainRng>, u64);
+
 /// One work unit: its chains (each with its remaining mutations) and its own sink.
 pub(crate) struct Job<'t, T: Target, K, C, Sk> {
-    pub(crate) chains: Vec<(Chain<'t, T, K, C, ChainRng>, u64)>,
+    pub(crate) chains: Vec<JobChain<'t, T, K, C>>,
     /// Per chain: the extra factor of its splats ([`super::ChainAllocation`]).
     pub(crate) weights: Vec<f64>,
     pub(crate) sink: Sk,
@@ -47,7 +50,7 @@ impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
 /// One round of a muted job's chains: the same steps as an unmuted job, no splats, no
 /// progress (the shard that owns them reports these mutations).
 fn step_muted<T, K, C>(
-    chains: &mut [(Chain<'_, T, K, C, ChainRng>, u64)],
+    chains: &mut [JobChain<'_, T, K, C>],
     round: u64,
     stop: &(impl Fn() -> bool + Sync),
 ) where

@@ -14,7 +14,6 @@
 
 use std::f64::consts::{PI, TAU};
 
-pub(crate) use mcmc_core::testing::ks_one_sample;
 use mcmc_core::testing::{sidak_alpha, ChiSquareReport, ALPHA};
 use pss::{torus_displacement, wrap};
 
