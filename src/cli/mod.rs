@@ -7,6 +7,7 @@ mod parse;
 mod progress;
 mod render_cmd;
 mod report_cmd;
+mod sweep_cmd;
 
 use std::error::Error;
 use std::process::ExitCode;
@@ -34,6 +35,8 @@ enum Command {
     Compare(compare_cmd::CompareArgs),
     /// Write a self-contained HTML report comparing result images with a reference.
     Report(report_cmd::ReportArgs),
+    /// Run a sweep's job list here, run one job of it on a cluster node, show its progress.
+    Sweep(sweep_cmd::SweepArgs),
 }
 
 /// Parses the command line, runs the command and turns errors into a message and exit code 1
@@ -44,6 +47,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Render(args) => render_cmd::run(args),
         Command::Compare(args) => compare_cmd::run(args),
         Command::Report(args) => report_cmd::run(args),
+        Command::Sweep(args) => sweep_cmd::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
