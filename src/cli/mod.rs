@@ -10,6 +10,7 @@ mod progress;
 mod render_cmd;
 mod report_cmd;
 mod shard_cmd;
+mod sweep_cmd;
 
 use std::error::Error;
 use std::process::ExitCode;
@@ -39,6 +40,8 @@ enum Command {
     Report(report_cmd::ReportArgs),
     /// Add up the parts of a render split with `render --shard K/N` into its EXR.
     Merge(shard_cmd::MergeArgs),
+    /// Run a sweep's job list here, run one job of it on a cluster node, show its progress.
+    Sweep(sweep_cmd::SweepArgs),
 }
 
 /// Parses the command line, runs the command and turns errors into a message and exit code 1
@@ -60,6 +63,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Compare(args) => compare_cmd::run(args),
         Command::Report(args) => report_cmd::run(args),
         Command::Merge(args) => shard_cmd::run(args),
+        Command::Sweep(args) => sweep_cmd::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
