@@ -7,7 +7,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::harness::Experiment;
-use crate::report::current_commit;
+use crate::report::BUILD_COMMIT;
 use crate::results::Results;
 use crate::sweep::emit::{experiment_sweep, shown, write_sweep_files};
 use crate::sweep::joblist::JOBS_FILE;
@@ -135,7 +135,7 @@ impl Experiment<'_> {
             id,
             &self.plan,
             self.method_names(),
-            current_commit("."),
+            BUILD_COMMIT.to_string(),
             started.elapsed().as_secs_f64(),
             &records,
         );
