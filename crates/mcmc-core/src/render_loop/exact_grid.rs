@@ -228,19 +228,7 @@ impl ExactSplatGrid {
     /// [`super::SplatGrid::to_rgb32_checked`]).
     #[must_use]
     pub fn to_rgb32_checked(&self, scale: f64) -> (Vec<[f32; 3]>, u64) {
-        let mut dropped = 0;
-        let pixels = (0..self.cells.len())
-            .map(|i| {
-                let v = self.value(i).map(|c| (c * scale) as f32);
-                if v.iter().all(|c| c.is_finite()) {
-                    v
-                } else {
-                    dropped += 1;
-                    [0.0; 3]
-                }
-            })
-            .collect();
-        (pixels, dropped)
+        super::splat::scaled_rgb32((0..self.cells.len()).map(|i| self.value(i)), scale)
     }
 }
 

@@ -133,22 +133,29 @@ impl SplatGrid {
     /// returned is finite.
     #[must_use]
     pub fn to_rgb32_checked(&self, scale: f64) -> (Vec<[f32; 3]>, u64) {
-        let mut dropped = 0;
-        let pixels = self
-            .data
-            .iter()
-            .map(|p| {
-                let v = p.map(|c| (c * scale) as f32);
-                if v.iter().all(|c| c.is_finite()) {
-                    v
-                } else {
-                    dropped += 1;
-                    [0.0; 3]
-                }
-            })
-            .collect();
-        (pixels, dropped)
+        scaled_rgb32(self.data.iter().copied(), scale)
     }
+}
+
+/// `sums` multiplied by `scale` as f32 RGB, with the number of pixels made black because a
+/// channel is not a finite f32 (the splat grids' `to_rgb32_checked`).
+pub(super) fn scaled_rgb32(
+    sums: impl Iterator<Item = [f64; 3]>,
+    scale: f64,
+) -> (Vec<[f32; 3]>, u64) {
+    let mut dropped = 0;
+    let pixels = sums
+        .map(|p| {
+            let v = p.map(|c| (c * scale) as f32);
+            if v.iter().all(|c| c.is_finite()) {
+                v
+            } else {
+                dropped += 1;
+                [0.0; 3]
+            }
+        })
+        .collect();
+    (pixels, dropped)
 }
 
 impl SplatSink for SplatGrid {
