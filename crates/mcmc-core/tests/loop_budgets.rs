@@ -155,7 +155,7 @@ fn a_cancel_stops_the_chain_set_up() {
         out.notes
     );
     assert_eq!(out.mutations, 0);
-    assert!(has_note(&out, "the image is black"), "{:?}", out.notes);
+    assert!(has_note(&out, "image is black"), "{:?}", out.notes);
     // Control: without the cancel every chain starts and runs.
     let full = run(&[RAMP], &settings);
     assert_eq!((full.chains, full.mutations), (4096, 1_000_000));

@@ -45,6 +45,24 @@ pub enum RenderError {
     /// The requested integrator is not implemented by [`crate::session::render`].
     #[error("integrator {0} is not supported by this renderer")]
     UnsupportedIntegrator(String),
+    /// The render would need more memory than is available: refused before any work
+    /// (`render::methods::memory::check`).
+    #[error(
+        "not enough memory: the render needs about {} but {} is available ({limit}): {advice}",
+        crate::methods::memory::Bytes(*needed),
+        crate::methods::memory::Bytes(*available)
+    )]
+    OutOfMemory {
+        /// The estimated peak in bytes.
+        needed: u64,
+        /// The bytes available.
+        available: u64,
+        /// What limits them (`/proc/meminfo`, the address-space limit, or the environment
+        /// variable `CHAINLIGHT_MEMORY_LIMIT`).
+        limit: String,
+        /// What the estimate is made of and which flags would make the render fit.
+        advice: String,
+    },
     /// The worker thread pool could not be created.
     #[error("cannot start {threads} worker threads: {reason}")]
     ThreadPool {

@@ -519,7 +519,7 @@ where
         out.notes.extend(normalization_note);
         if boot.cancelled {
             out.notes.push(
-                "cancelled during the bootstrap, before any chain ran: the image is black"
+                "cancelled during the bootstrap, before any chain ran: the chains' image is black"
                     .to_owned(),
             );
             return Ok(out);
@@ -656,9 +656,9 @@ where
         if out.mutations == 0 {
             out.notes.push(
                 if out.cancelled {
-                    "cancelled before the chains' first mutation: the image is black"
+                    "cancelled before the chains' first mutation: the chains' image is black"
                 } else {
-                    "no chain ran a mutation: the image is black"
+                    "no chain ran a mutation: the chains' image is black"
                 }
                 .to_owned(),
             );

@@ -31,6 +31,9 @@ pub struct BdptOutput {
     pub dropped: u64,
     /// True if cancelled early.
     pub cancelled: bool,
+    /// Pixels without a camera sample (only light-tracing splats reach them): a cancel or
+    /// the time budget stopped the first pass before their row.
+    pub unsampled_pixels: u64,
     /// MIS-weighted image of each strategy `(s, t)` (only if requested); they sum to `image`.
     pub strategy_images: Vec<((u8, u8), Image)>,
 }
@@ -102,7 +105,8 @@ struct Pass<'a> {
     seed: u64,
     sampler: SamplerKind,
     index: u32,
-    /// Rows not started by then are skipped (time budgets, after the first pass).
+    /// Rows not started by then are skipped (time budgets; in the first pass every row but
+    /// the image's first).
     deadline: Option<Instant>,
     progress: &'a dyn Progress,
     cancel: &'a AtomicBool,
@@ -122,7 +126,8 @@ impl Band {
     fn render_with<S: PixelSampler>(&mut self, pass: &Pass<'_>, mut sampler: S) -> bool {
         let w = self.light.width();
         for y in self.rows.clone() {
-            if pass.deadline.is_some_and(|d| Instant::now() >= d) {
+            let first = pass.index == 0 && y == 0;
+            if !first && pass.deadline.is_some_and(|d| Instant::now() >= d) {
                 return false;
             }
             for x in 0..w {
@@ -202,8 +207,10 @@ impl Band {
 /// light subpath per camera sample). Both are unbiased for any per-pixel sample counts, so
 /// the image stays a correct average when a pass is cut short: `cancel` is checked before
 /// every pixel sample (a cancelled render returns within a fraction of a second at any
-/// `spp`), and under a time budget rows not started by the deadline are skipped after the
-/// first pass. Progress is reported in pixel samples.
+/// `spp`), and under a time budget rows not started by the deadline are skipped, in the
+/// first pass too (all but the image's first row), so a huge image stops on time with the
+/// pixels it did not reach counted in [`BdptOutput::unsampled_pixels`]. Progress is reported
+/// in pixel samples.
 #[allow(clippy::too_many_arguments)]
 pub fn render_bdpt(
     scene: SceneRef<'_>,
@@ -292,11 +299,11 @@ pub fn render_bdpt_sampled(
             seed,
             sampler,
             index: done,
-            deadline: time.filter(|_| done > 0).map(|t| start + t),
+            deadline: time.map(|t| start + t),
             progress,
             cancel,
         };
-        if pass.deadline.is_some_and(|d| Instant::now() >= d) {
+        if done > 0 && pass.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
         let complete: Vec<bool> = bands.par_iter_mut().map(|b| b.render(&pass)).collect();
@@ -308,6 +315,12 @@ pub fn render_bdpt_sampled(
     let cancelled = cancel.load(Ordering::Relaxed) && done < total_spp;
 
     let samples: u64 = bands.iter().map(|b| b.samples).sum();
+    // An incomplete first pass took at most one sample per pixel: the others have none.
+    let unsampled_pixels = if done == 0 {
+        ((w * h) as u64).saturating_sub(samples)
+    } else {
+        0
+    };
     let light_scale = if samples == 0 {
         0.0
     } else {
@@ -339,6 +352,7 @@ pub fn render_bdpt_sampled(
         samples,
         dropped: bands.iter().map(|b| b.dropped).sum::<u64>() + overflowed,
         cancelled,
+        unsampled_pixels,
         strategy_images,
     }
 }

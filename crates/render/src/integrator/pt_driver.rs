@@ -54,6 +54,9 @@ pub struct PtOutput {
     pub dropped_nonfinite: u64,
     /// True if `cancel` stopped the render early.
     pub cancelled: bool,
+    /// Pixels without any sample (black): a cancel or the time budget stopped the first pass
+    /// before their tile ([`PassesOutcome::unsampled_pixels`]).
+    pub unsampled_pixels: u64,
 }
 
 /// Renders `scene` with unidirectional path tracing at `settings.width x settings.height`,
@@ -69,8 +72,9 @@ pub struct PtOutput {
 ///   (fewer in the last): every pixel soon has samples, and a pass never adds more than the
 ///   pixels already had, so tiles a cancelled pass did not reach have at least half the
 ///   samples of the others.
-/// * `Time(d)`: passes of one sample per pixel until `d` has elapsed; after the first pass,
-///   tiles not started before the deadline are skipped.
+/// * `Time(d)`: passes of one sample per pixel until `d` has elapsed; tiles not started
+///   before the deadline are skipped, in the first pass too (except its first tile): a huge
+///   image stops on time and reports its unsampled pixels ([`PtOutput::unsampled_pixels`]).
 /// * `cancel` is checked before every sample index of every tile (one sample of each of the
 ///   tile's pixels, milliseconds of work), so a cancelled render returns promptly at any
 ///   sample count, with every pixel normalised by its own samples: the partial image is an
@@ -152,7 +156,7 @@ where
         }
         (tile, true)
     };
-    let cancelled = render_passes(
+    let outcome = render_passes(
         settings.width,
         settings.height,
         settings.budget,
@@ -170,21 +174,34 @@ where
         image,
         samples: film.samples,
         dropped_nonfinite: film.nonfinite + overflowed,
-        cancelled,
+        cancelled: outcome.cancelled,
+        unsampled_pixels: outcome.unsampled_pixels,
     }
 }
 
+/// How [`render_passes`] ended.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PassesOutcome {
+    /// True if `cancel` stopped the render.
+    pub cancelled: bool,
+    /// Pixels of the tiles that never completed a pass: they have no sample (black). Nonzero
+    /// only if a cancel or the time budget stopped the first pass.
+    pub unsampled_pixels: u64,
+}
+
 /// The tiling, threading, pass, budget, progress and cancellation machinery of the PT driver,
-/// for any per-tile work: returns true if the render was cancelled.
+/// for any per-tile work.
 ///
 /// `render_tile(rect, first, count)` renders sample indices `first..first + count` of the
 /// pixels of `rect` (a [`TILE_SIZE`] tile; tiles run in parallel on the current rayon pool)
 /// and returns its result and whether it completed (false: it saw `cancel`).
 /// `end_pass(first, count, results)` receives every tile's result of a pass, in tile order
-/// (`None` for a tile a [`Budget::Time`] render skipped because the deadline had passed), so
-/// merging in that order gives the same bits for any thread count. Passes are as in
-/// [`render_pt`]: doubling up to a sixteenth of a sample budget, or one sample per pixel until
-/// the time budget is spent (the first pass always runs). Progress is in pixel samples; the
+/// (`None` for a tile not started because `cancel` was set or a [`Budget::Time`] deadline
+/// had passed), so merging in that order gives the same bits for any thread count. Passes
+/// are as in [`render_pt`]: doubling up to a sixteenth of a sample budget, or one sample per
+/// pixel until the time budget is spent. The deadline is checked before every tile, in the
+/// first pass too (whose first tile always runs), so a huge image stops on time with part
+/// of it unsampled ([`PassesOutcome::unsampled_pixels`]). Progress is in pixel samples; the
 /// tile reports its own progress.
 pub fn render_passes<R, F, M>(
     width: u32,
@@ -194,7 +211,7 @@ pub fn render_passes<R, F, M>(
     cancel: &AtomicBool,
     render_tile: F,
     mut end_pass: M,
-) -> bool
+) -> PassesOutcome
 where
     R: Send,
     F: Fn(PixelRect, u32, u32) -> (R, bool) + Sync,
@@ -205,15 +222,25 @@ where
     let work = tiles(w, h, TILE_SIZE);
     let pixels = (w * h) as u64;
     let mut cancelled = false;
+    // Per tile: has it completed a pass (so every pixel has a sample)?
+    let mut sampled = vec![false; work.len()];
+    let mut record = |done: &[Option<(R, bool)>]| {
+        for (s, d) in sampled.iter_mut().zip(done) {
+            *s |= matches!(d, Some((_, true)));
+        }
+    };
     match budget {
         Budget::SamplesPerPixel(spp) => {
             progress.set_total(pixels * u64::from(spp));
             for (first, count) in passes(spp) {
                 let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
-                    .map(|&rect| Some(render_tile(rect, first, count)))
+                    .map(|&rect| {
+                        (!cancel.load(Ordering::Relaxed)).then(|| render_tile(rect, first, count))
+                    })
                     .collect();
-                cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
+                cancelled |= done.iter().any(|d| !matches!(d, Some((_, true))));
+                record(&done);
                 end_pass(first, count, done);
                 if cancelled {
                     break;
@@ -226,12 +253,15 @@ where
             loop {
                 let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
-                    .map(|&rect| {
-                        let late = pass > 0 && Instant::now() >= deadline;
-                        (!late).then(|| render_tile(rect, pass, 1))
+                    .enumerate()
+                    .map(|(i, &rect)| {
+                        let late = (pass > 0 || i > 0) && Instant::now() >= deadline;
+                        (!late && !cancel.load(Ordering::Relaxed))
+                            .then(|| render_tile(rect, pass, 1))
                     })
                     .collect();
                 cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
+                record(&done);
                 end_pass(pass, 1, done);
                 pass += 1;
                 cancelled |= cancel.load(Ordering::Relaxed);
@@ -247,7 +277,16 @@ where
             }
         }
     }
-    cancelled
+    let unsampled_pixels = work
+        .iter()
+        .zip(&sampled)
+        .filter(|(_, &s)| !s)
+        .map(|(rect, _)| rect.area() as u64)
+        .sum();
+    PassesOutcome {
+        cancelled,
+        unsampled_pixels,
+    }
 }
 
 /// The passes `(first sample index, samples per pixel)` of a render of `spp` samples per

@@ -153,6 +153,9 @@ pub struct LqmcOutput {
     pub dropped_nonfinite: u64,
     /// True if `cancel` stopped the render.
     pub cancelled: bool,
+    /// Pixels whose tile a cancel or the time budget stopped before its first seed path
+    /// (only lattice members of neighbouring tiles' seeds land there).
+    pub unsampled_pixels: u64,
 }
 
 /// Splat sums of one work unit: its pixels plus the margin its lattice sets can reach;
@@ -263,7 +266,7 @@ pub fn render_lqmc(
     let mut partial: Option<(Vec<[f64; 3]>, u32)> = None;
     let mut progressions = 0u32;
     let mut totals = ExploreStats::default();
-    let cancelled = render_passes(
+    let outcome = render_passes(
         settings.width,
         settings.height,
         settings.budget,
@@ -316,7 +319,8 @@ pub fn render_lqmc(
         members: totals.members,
         rejected: totals.rejected,
         dropped_nonfinite: dropped,
-        cancelled,
+        cancelled: outcome.cancelled,
+        unsampled_pixels: outcome.unsampled_pixels,
     }
 }
 
