@@ -74,8 +74,8 @@ pub enum LoopBudget {
 pub struct LoopSettings {
     /// Number of Markov chains (default 256; 1..=1 048 576). Capped at the number of
     /// mutations under a mutation budget, and under a time budget at what the time left after
-    /// the bootstrap affords ([`MIN_TIME_MUTATIONS`] mutations per chain at the bootstrap's
-    /// rate), with a note.
+    /// the bootstrap affords (a round or [`MIN_TIME_MUTATIONS`] mutations per chain at the
+    /// bootstrap's rate), with a note.
     pub chains: usize,
     /// Independent samples per target in the bootstrap (default 100 000, pbrt's value;
     /// 1..=10^12).
@@ -128,9 +128,11 @@ pub const MAX_CHAINS: usize = 1 << 20;
 /// Largest accepted bootstrap size per target.
 pub const MAX_BOOTSTRAP_SAMPLES: u64 = 1_000_000_000_000;
 
-/// Under a time budget, the fewest mutations the loop plans per chain: the chains are capped
-/// at what the time left after the bootstrap affords at the bootstrap's rate of target
-/// evaluations (starting a chain counted as well), with a note.
+/// Under a time budget, the fewest mutations the loop plans per chain (or one round,
+/// [`LoopSettings::round_mutations`], if that is more: a job runs its chains one after the
+/// other, a round each, so chains beyond what the time affords in the first round would never
+/// run): the chains are capped at what the time left after the bootstrap affords at the
+/// bootstrap's rate of target evaluations (starting a chain counted as well), with a note.
 pub const MIN_TIME_MUTATIONS: u64 = 100;
 
 /// Samples with light a target's bootstrap should have before its `b_d`, and the standard
@@ -446,6 +448,7 @@ where
             .max()
             .unwrap_or(1)
             .min(settings.bootstrap_samples);
+        let min_chain_mutations = MIN_TIME_MUTATIONS.max(settings.round_mutations);
         let boot = bootstrap::run(
             self.targets,
             self.states,
@@ -459,7 +462,7 @@ where
                 min_rows,
                 time_cap: deadline.map(|deadline| TimeCap {
                     deadline,
-                    min_mutations: MIN_TIME_MUTATIONS,
+                    min_mutations: min_chain_mutations,
                 }),
                 progress,
                 cancel,
@@ -479,7 +482,7 @@ where
         }
         if let Some(capped) = boot.time_capped {
             notes.push(format!(
-                "{chains} chains requested: using {capped}, what the time left after the bootstrap affords at its rate ({:.0} samples/s) with at least {MIN_TIME_MUTATIONS} mutations per chain",
+                "{chains} chains requested: using {capped}, what the time left after the bootstrap affords at its rate ({:.0} samples/s) with at least {min_chain_mutations} mutations per chain",
                 boot.evaluated as f64 / start.elapsed().as_secs_f64().max(1e-9)
             ));
         }

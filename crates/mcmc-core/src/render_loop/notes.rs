@@ -35,7 +35,9 @@ pub(super) fn few_hits_note(target_b: &[f64], hits: &[u64], b: f64) -> Option<St
 /// ([`ChainAllocation::PerTarget`]) their light is missing from the image; jointly
 /// ([`ChainAllocation::Joint`]) the chains that exist carry all of `b`, so the image shows
 /// only the light of the targets that got chains, scaled to the whole: right on average over
-/// seeds, not in this image.
+/// seeds, not in this image. Jointly, a chain count proportional to `b_d` leaves the faintest
+/// targets without chains in most renders: noted only when they hold at least a hundredth of
+/// `b`.
 pub(super) fn missed_targets_note(
     target_b: &[f64],
     target_chains: &[usize],
@@ -50,6 +52,9 @@ pub(super) fn missed_targets_note(
     }
     let b: f64 = target_b.iter().filter(|b_d| b_d.is_finite()).sum();
     let share: f64 = missed.iter().map(|&t| target_b[t]).sum::<f64>() / b;
+    if allocation == ChainAllocation::Joint && (share.is_nan() || share < NOTABLE_SHARE) {
+        return None;
+    }
     let chains: usize = target_chains.iter().sum();
     let names = if missed.len() <= 8 {
         missed
@@ -98,6 +103,11 @@ mod tests {
         assert!(missed_targets_note(&[0.5, 0.5], &[1, 1], ChainAllocation::Joint).is_none());
         // No light, no chain: nothing is missing.
         assert!(missed_targets_note(&[1.0, 0.0], &[2, 0], ChainAllocation::Joint).is_none());
+        // Jointly, faint targets without chains are the rule, not worth a note; per target
+        // every target with light should have a chain.
+        let faint = [0.999, 0.001];
+        assert!(missed_targets_note(&faint, &[8, 0], ChainAllocation::Joint).is_none());
+        assert!(missed_targets_note(&faint, &[8, 0], ChainAllocation::PerTarget).is_some());
         let joint = missed_targets_note(&[0.75, 0.25], &[1, 0], ChainAllocation::Joint).unwrap();
         assert!(
             joint.contains("1 of 2") && joint.contains("25 % of b"),

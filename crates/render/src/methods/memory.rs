@@ -74,7 +74,7 @@ impl MemoryEstimate {
     }
 }
 
-/// Bytes as `12.3 GiB`, `456 MiB` or `789 KiB`.
+/// Bytes as `12.34 GiB`, `456 MiB` or `789 KiB`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Bytes(pub u64);
 
@@ -82,7 +82,7 @@ impl fmt::Display for Bytes {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let b = self.0 as f64;
         if b >= (1u64 << 30) as f64 {
-            write!(f, "{:.1} GiB", b / (1u64 << 30) as f64)
+            write!(f, "{:.2} GiB", b / (1u64 << 30) as f64)
         } else if b >= (1u64 << 20) as f64 {
             write!(f, "{:.0} MiB", b / (1u64 << 20) as f64)
         } else {
@@ -474,7 +474,7 @@ mod tests {
         let text = "MemTotal:       24000000 kB\nMemAvailable:   2048 kB\n";
         assert_eq!(kib_field(text, "MemAvailable:"), Some(2048 * 1024));
         assert_eq!(kib_field(text, "Nope:"), None);
-        assert_eq!(Bytes(3 << 30).to_string(), "3.0 GiB");
+        assert_eq!(Bytes(3 << 30).to_string(), "3.00 GiB");
         assert_eq!(Bytes(5 << 20).to_string(), "5 MiB");
     }
 }

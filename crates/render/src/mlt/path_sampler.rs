@@ -212,6 +212,9 @@ pub fn mmlt_depth_normalization(
         .map(|n| n.b)
 }
 
+/// One block's per-depth luminance sums and its sample count.
+type BlockSums = (Vec<f64>, u64);
+
 /// What [`mmlt_depth_normalization_until`] estimated.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DepthNormalization {
@@ -244,8 +247,9 @@ pub fn mmlt_depth_normalization_until(
     let size = Vec2::new(width as f32, height as f32);
     let key_seed = mcmc_core::seed::mix64(seed ^ 0xbd97_a11d_e97b_0001);
     let blocks = samples.div_ceil(NORMALIZATION_BLOCK);
-    // Per block: its sums and sample count; `Some(None)` for a block the deadline skipped.
-    let sums: Vec<Option<Option<(Vec<f64>, u64)>>> = (0..blocks)
+    // Per block: its sums and sample count; `Some(None)` for a block the deadline skipped,
+    // `None` if cancelled.
+    let sums: Vec<Option<Option<BlockSums>>> = (0..blocks)
         .into_par_iter()
         .map_init(
             || (PssState::new(PATH_STREAMS, 0), BdptScratch::default()),
