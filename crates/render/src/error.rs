@@ -49,8 +49,8 @@ pub enum RenderError {
     /// (`render::methods::memory::check`).
     #[error(
         "not enough memory: the render needs about {} but {} is available ({limit}): {advice}",
-        crate::methods::memory::Bytes(*needed),
-        crate::methods::memory::Bytes(*available)
+        Bytes(*needed),
+        Bytes(*available)
     )]
     OutOfMemory {
         /// The estimated peak in bytes.
@@ -71,6 +71,23 @@ pub enum RenderError {
         /// The reason reported by rayon.
         reason: String,
     },
+}
+
+/// Bytes as `12.34 GiB`, `456 MiB` or `789 KiB`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bytes(pub u64);
+
+impl std::fmt::Display for Bytes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let b = self.0 as f64;
+        if b >= (1u64 << 30) as f64 {
+            write!(f, "{:.2} GiB", b / (1u64 << 30) as f64)
+        } else if b >= (1u64 << 20) as f64 {
+            write!(f, "{:.0} MiB", b / (1u64 << 20) as f64)
+        } else {
+            write!(f, "{:.0} KiB", b / 1024.0)
+        }
+    }
 }
 
 impl RenderError {

@@ -7,13 +7,13 @@
 //! (peak RSS over chain counts, Cornell box) and rounded up by about a quarter; they are
 //! estimates, not bounds.
 
-use std::fmt;
-
 use super::{
     DrmltSettings, IntegratorKind, LqmcSettings, MalaSettings, MethodSettings, RenderSettings,
 };
 use crate::bdpt::MAX_PATH_DEPTH;
 use crate::budget::Budget;
+/// Byte counts as people read them (`12.34 GiB`), defined with the error that prints them.
+pub use crate::error::Bytes;
 use crate::error::RenderError;
 use crate::integrator::pt_driver::TILE_SIZE;
 use crate::mlt::dr::{DrBase, DrVariant};
@@ -71,23 +71,6 @@ impl MemoryEstimate {
         self.image_bytes
             .saturating_add(self.chain_bytes)
             .saturating_add(self.fixed_bytes)
-    }
-}
-
-/// Bytes as `12.34 GiB`, `456 MiB` or `789 KiB`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Bytes(pub u64);
-
-impl fmt::Display for Bytes {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let b = self.0 as f64;
-        if b >= (1u64 << 30) as f64 {
-            write!(f, "{:.2} GiB", b / (1u64 << 30) as f64)
-        } else if b >= (1u64 << 20) as f64 {
-            write!(f, "{:.0} MiB", b / (1u64 << 20) as f64)
-        } else {
-            write!(f, "{:.0} KiB", b / 1024.0)
-        }
     }
 }
 
