@@ -440,4 +440,38 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn a_deadline_inside_the_first_pass_leaves_counted_unsampled_pixels() {
+        // The deadline has passed when the render starts: only the image's first row (which
+        // always runs) gets camera samples.
+        let scene = Scene::cornell_box(16, 16);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let params = BdptParams::default();
+        let no = AtomicBool::new(false);
+        let render = |spp, time| {
+            pool.install(|| {
+                render_bdpt(
+                    &scene,
+                    &params,
+                    spp,
+                    time,
+                    3,
+                    false,
+                    &mcmc_core::NoProgress,
+                    &no,
+                )
+            })
+        };
+        let out = render(None, Some(Duration::from_nanos(1)));
+        assert!(!out.cancelled);
+        assert_eq!((out.spp, out.samples), (0, 16));
+        assert_eq!(out.unsampled_pixels, 16 * 16 - 16);
+        // Control: a sample budget reaches every pixel.
+        let out = render(Some(1), None);
+        assert_eq!((out.samples, out.unsampled_pixels), (256, 0));
+    }
 }

@@ -355,4 +355,27 @@ mod tests {
         assert_eq!(passes(16).count(), 16);
         assert_eq!(passes(1).collect::<Vec<_>>(), [(0, 1)]);
     }
+
+    #[test]
+    fn a_deadline_inside_the_first_pass_leaves_counted_unsampled_pixels() {
+        // 64 x 32: eight tiles. The deadline has passed when the render starts: only the
+        // first tile (which always runs) is sampled.
+        let scene = Scene::cornell_box(64, 32);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let mut s = settings(1);
+        (s.width, s.height) = (64, 32);
+        s.budget = Budget::Time(std::time::Duration::from_nanos(1));
+        let no = AtomicBool::new(false);
+        let out = pool.install(|| render_pt(&scene, &s, &mcmc_core::NoProgress, &no));
+        assert!(!out.cancelled);
+        assert_eq!(out.samples, 256);
+        assert_eq!(out.unsampled_pixels, 64 * 32 - 256);
+        // Control: a sample budget reaches every pixel.
+        s.budget = Budget::SamplesPerPixel(1);
+        let out = pool.install(|| render_pt(&scene, &s, &mcmc_core::NoProgress, &no));
+        assert_eq!((out.samples, out.unsampled_pixels), (64 * 32, 0));
+    }
 }

@@ -296,3 +296,36 @@ pub fn mmlt_depth_normalization_until(
         samples: taken,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_depth_normalization_stops_at_its_deadline() {
+        let scene = Scene::cornell_box(8, 8);
+        let params = BdptParams::default();
+        let no = AtomicBool::new(false);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let until = |samples, deadline| {
+            pool.install(|| {
+                mmlt_depth_normalization_until(&scene, params, 8, 8, samples, 1, deadline, &no)
+            })
+            .unwrap()
+        };
+        // A deadline that has passed: only the first block runs, and its mean is the estimate.
+        let stopped = until(100_000, Some(Instant::now()));
+        assert_eq!(stopped.samples, NORMALIZATION_BLOCK);
+        let first_block = until(NORMALIZATION_BLOCK, None);
+        assert_eq!(stopped, first_block);
+        assert!(stopped.b.iter().sum::<f64>() > 0.0);
+        // Control: without a deadline every sample is taken, bit for bit as before.
+        let all = until(3 * NORMALIZATION_BLOCK, None);
+        assert_eq!(all.samples, 3 * NORMALIZATION_BLOCK);
+        let plain = mmlt_depth_normalization(&scene, params, 8, 8, 3 * NORMALIZATION_BLOCK, 1, &no);
+        assert_eq!(Some(all.b), plain);
+    }
+}
