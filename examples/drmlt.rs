@@ -84,7 +84,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let toy = toy(&plan.out, !args.no_toy)?;
     if args.no_scenes {
         println!("{toy}");
-        return Ok(std::fs::write(plan.out.join("results.md"), toy)?);
+        return Ok(render::files::write_bytes_atomic(
+            plan.out.join("results.md"),
+            toy,
+        )?);
     }
     if args.stats_only {
         (plan.regime, plan.seeds, plan.report) = (Regime::EqualSamples(16), vec![7], false);
@@ -118,7 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let errors = TableSpec::errors([Measure::RelMse, Measure::Mad]).with(Column::step_cost());
     let errors = errors.with(Column::ratio(Measure::RelMse));
     let tables = [errors, TableSpec::acceptance_by_stage().only(dr.clone())];
-    let results = Experiment::new(plan)
+    let Some(results) = Experiment::new(plan)
         .methods(methods)
         .baseline(if args.stats_only { &dr[2] } else { "PSSMLT/K" })
         .scenes(cases)
@@ -126,7 +129,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .parameter("max depth", 5)
         .parameter("chains", 256)
         .parameter("large-step probability", 0.3)
-        .run()?;
+        .execute()?
+    else {
+        return Ok(()); // a job list written, or one run of it recorded
+    };
     let calibration = fits.table("PSSMLT/G sigma").to_markdown();
     let extra = format!("## PSSMLT/G: sigma matched to DR orbital's acceptance on PSSMLT (16 mpp, seed 7)\n\n{calibration}{toy}");
     results.write_with(&tables[usize::from(args.stats_only)..], &extra)?;

@@ -92,12 +92,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ));
     let table =
         TableSpec::errors([Measure::Mse, Measure::RelMse]).with(Column::ratio(Measure::Mse));
-    let results = Experiment::new(plan)
+    let Some(results) = Experiment::new(plan)
         .methods(methods)
         .baseline("MMLT/K")
         .parameter("max depth", 5)
         .parameter("large-step probability", 0.3)
-        .run()?;
+        .execute()?
+    else {
+        return Ok(()); // a job list written, or one run of it recorded
+    };
     results.write_with(&[table], "")?;
     Ok(())
 }

@@ -22,7 +22,6 @@
 //!
 //! docs/methods/mala.md shows the images and the table of a run.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -384,15 +383,12 @@ fn main() {
         "\n{} steps per row from an exact start (one chain each):\n{table}",
         o.steps
     );
-    match std::fs::File::create(o.out.join("table.md")) {
-        Ok(mut f) => {
-            let _ = writeln!(
-                f,
-                "{} steps per row from an exact start (one chain each).\n\n{table}",
-                o.steps
-            );
-        }
-        Err(e) => eprintln!("cannot write table.md: {e}"),
+    let text = format!(
+        "{} steps per row from an exact start (one chain each).\n\n{table}\n",
+        o.steps
+    );
+    if let Err(e) = render::files::write_bytes_atomic(o.out.join("table.md"), text) {
+        eprintln!("cannot write table.md: {e}");
     }
     println!("images in {}", o.out.display());
 }

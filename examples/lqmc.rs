@@ -70,7 +70,7 @@ fn main() -> Res<()> {
     let toy = (!args.no_toy).then(|| toy(&plan.out)).transpose()?;
     let toy = toy.unwrap_or_default();
     if args.no_scenes {
-        std::fs::write(plan.out.join("results.md"), &toy)?;
+        render::files::write_bytes_atomic(plan.out.join("results.md"), &toy)?;
         println!("{toy}");
         return Ok(());
     }

@@ -16,6 +16,11 @@
 //!
 //! `cargo run --release --example zsolnai_large_step -- [--size 64] [--mpp 64] [--runs 3]
 //! [--out DIR] [--no-report] [--quick] [scene ...]` (`--help` lists the shared flags).
+//!
+//! Beyond one machine: `--emit-jobs DIR` writes the runs (one per scene and seed) as a job
+//! list with a Slurm array script and a Kubernetes Indexed Job; `chainlight sweep run DIR`
+//! (or the cluster) runs them, and the same command with `--collect` writes the same
+//! `results.md` (docs/cluster.md).
 
 use experiments::{CommonOptions, Defaults, Experiment, Measure, Method, Regime, Results, Table};
 use render::methods::PssmltSettings;
@@ -56,7 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         fixed.chain.large_step = LargeStepMode::Fixed(p);
         pssmlt(format!("p_l={p:.1}"), fixed)
     }));
-    let results = Experiment::new(plan)
+    let Some(results) = Experiment::new(plan)
         .methods(methods)
         .baseline("auto")
         .convergence(&[0.125, 0.25, 0.5])
@@ -80,7 +85,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ),
             ]
         })
-        .run()?;
+        .execute()?
+    else {
+        return Ok(()); // a job list written, or one run of it recorded
+    };
     results.write(&sweep_table(&results))?;
     Ok(())
 }

@@ -156,11 +156,8 @@ fn every_integrator_stops_promptly_on_ctrl_c() {
     every_integrator_stops_on("INT");
 }
 
-/// SIGTERM must behave as Ctrl-C. The CLI's handler (the `ctrlc` crate without its
-/// `termination` feature) does not catch it on this branch: the signal work that makes
-/// SIGTERM stop a render like Ctrl-C lands separately; run with `--ignored` once it has.
+/// SIGTERM behaves as Ctrl-C.
 #[test]
-#[ignore = "SIGTERM is not yet handled like Ctrl-C by the CLI"]
 fn every_integrator_stops_promptly_on_sigterm() {
     every_integrator_stops_on("TERM");
 }

@@ -17,7 +17,17 @@ fn interrupt(
     args: &[&str],
     wait: std::time::Duration,
 ) -> (Output, Vec<String>, std::time::Duration) {
-    common::signal_after_start(args, "INT", wait)
+    signal(args, wait, "INT")
+}
+
+/// [`interrupt`] with the signal `name` (`INT`, `TERM`, ...): [`common::signal_after_start`].
+#[cfg(unix)]
+fn signal(
+    args: &[&str],
+    wait: std::time::Duration,
+    name: &str,
+) -> (Output, Vec<String>, std::time::Duration) {
+    common::signal_after_start(args, name, wait)
 }
 
 /// Ctrl-C (SIGINT) during a long render still writes the partial image and exits with 0.
@@ -37,6 +47,34 @@ fn ctrl_c_writes_the_partial_image() {
     let image = read_exr(&out).unwrap();
     assert_eq!((image.width, image.height), (32, 32));
     assert!(dir.join("partial.png").is_file());
+}
+
+/// SIGTERM (what `kill`, `timeout` and service managers send) is treated like Ctrl-C: the
+/// render stops within a few seconds and writes its partial image. Negative control: SIGKILL,
+/// which cannot be handled, writes nothing.
+#[cfg(unix)]
+#[test]
+fn sigterm_writes_the_partial_image() {
+    use std::time::Duration;
+
+    let dir = temp_dir("sigterm");
+    let out = dir.join("partial.exr");
+    let args = ["render", "--width", "32", "--height", "32", "--time", "30"];
+    let args = [&args[..], &["--threads", "1", "-o", path_str(&out)]].concat();
+    let (output, rest, took) = signal(&args, Duration::from_millis(500), "TERM");
+    assert!(output.status.success(), "{rest:?}");
+    assert!(took < Duration::from_secs(5), "{took:?}");
+    assert!(rest.iter().any(|l| l.contains("partial image")), "{rest:?}");
+    assert!(stdout(&output).contains("cancelled"), "{}", stdout(&output));
+    let image = read_exr(&out).unwrap();
+    assert_eq!((image.width, image.height), (32, 32));
+    assert!(image.mean_luminance() > 0.0);
+
+    let killed = dir.join("killed.exr");
+    let args = [&args[..args.len() - 1], &[path_str(&killed)]].concat();
+    let (output, _, _) = signal(&args, Duration::from_millis(500), "KILL");
+    assert!(!output.status.success());
+    assert!(!killed.exists());
 }
 
 /// Ctrl-C under a huge `--spp` stops every integrator of the table within a second or two

@@ -250,7 +250,8 @@ fn roulette_small_step_and_direct_pass_flags() {
     let dir = temp_dir("roulette-direct");
     let out = dir.join("img.exr");
     // (arguments, whether the direct pass runs: on by default for pssmlt, 0 turns it off,
-    // never for bdpt or mmlt)
+    // never for bdpt; `--direct-samples` with mmlt is an error:
+    // `flags_without_effect_are_errors_naming_where_they_apply`)
     for (extra, direct) in [
         (&["--integrator", "bdpt", "--roulette", "off"][..], false),
         (
@@ -281,10 +282,6 @@ fn roulette_small_step_and_direct_pass_flags() {
             &["--integrator", "pssmlt", "--direct-share", "auto"][..],
             true,
         ),
-        (
-            &["--integrator", "mmlt", "--direct-samples", "4"][..],
-            false,
-        ),
     ] {
         let mut args = vec![
             "render",
@@ -294,13 +291,12 @@ fn roulette_small_step_and_direct_pass_flags() {
             "16",
             "--spp",
             "2",
-            "--bootstrap-samples",
-            "2000",
-            "--chains",
-            "16",
             "-o",
             path_str(&out),
         ];
+        if extra[1] != "bdpt" {
+            args.extend(["--bootstrap-samples", "2000", "--chains", "16"]);
+        }
         args.extend_from_slice(extra);
         let output = chainlight(&args);
         assert!(output.status.success(), "{extra:?}: {}", stderr(&output));
@@ -395,4 +391,82 @@ fn mmlt_robustness_flags_render_and_bad_values_are_named() {
         ],
         &["--strategy-strata", "expected on or off", "maybe"],
     );
+}
+
+/// A method flag typed for an integrator it has no effect on is an error naming the flag, the
+/// integrator and where the flag applies (every integrator x flag: the unit tests of
+/// `src/cli/method_flags.rs`); nothing is rendered.
+#[test]
+fn flags_without_effect_are_errors_naming_where_they_apply() {
+    let dir = temp_dir("inapplicable");
+    let out = dir.join("x.exr");
+    for (args, needles) in [
+        (
+            &["--integrator", "mmlt", "--direct-samples", "4"][..],
+            &[
+                "--direct-samples",
+                "--integrator mmlt",
+                "applies to: pssmlt",
+            ][..],
+        ),
+        (
+            &["--integrator", "pt", "--chains", "8"],
+            &["--chains", "--integrator pt", "pathmlt"],
+        ),
+        (
+            &["--integrator", "pssmlt", "--strategy-images"],
+            &["--strategy-images", "applies to: bdpt"],
+        ),
+        (
+            &["--integrator", "drmlt", "--mala-gradient", "fd"],
+            &[
+                "--mala-gradient",
+                "drmlt with --dr-variant cheap-then-expensive",
+            ],
+        ),
+        (
+            &["--integrator", "lqmc", "--roulette", "2"],
+            &["--roulette", "--integrator lqmc"],
+        ),
+    ] {
+        let full = [&["render", "--spp", "1", "-o", path_str(&out)][..], args].concat();
+        assert_fails_with(&full, needles);
+        assert!(!out.exists(), "{args:?}");
+    }
+    // Negative control: the same flags where they apply render.
+    let chains = ["--chains", "8", "--bootstrap-samples", "1000"];
+    for args in [
+        &["--integrator", "pssmlt", "--direct-samples", "4"][..],
+        &[
+            "--integrator",
+            "bdpt",
+            "--strategy-images",
+            "--max-depth",
+            "1",
+        ],
+        &[
+            "--integrator",
+            "drmlt",
+            "--dr-variant",
+            "cheap-then-expensive",
+            "--mala-gradient",
+            "fd",
+        ],
+    ] {
+        let mcmc = if args[1] == "bdpt" {
+            &[][..]
+        } else {
+            &chains[..]
+        };
+        let size = ["--width", "8", "--height", "8"];
+        let full = [
+            &["render", "--spp", "1", "-o", path_str(&out)][..],
+            &size,
+            mcmc,
+            args,
+        ]
+        .concat();
+        let output = chainlight(&full);
+        assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+    }
 }

@@ -38,6 +38,14 @@ pub enum ExperimentError {
     /// A scene or its reference could not be loaded.
     #[error("{0}")]
     Scene(String),
+    /// A file of a sweep (job list, status, run record) is malformed.
+    #[error("{}: {message}", path.display())]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
     /// The experiment is inconsistent: no methods, a duplicate name, an unknown baseline, a
     /// flag out of range, a reference of the wrong size, ...
     #[error("invalid experiment: {0}")]
@@ -49,5 +57,13 @@ impl ExperimentError {
     pub(crate) fn io(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> Self {
         let path = path.into();
         move |source| Self::Io { path, source }
+    }
+
+    /// [`ExperimentError::Format`] for `path`.
+    pub(crate) fn format(path: impl Into<PathBuf>, message: impl ToString) -> Self {
+        Self::Format {
+            path: path.into(),
+            message: message.to_string(),
+        }
     }
 }

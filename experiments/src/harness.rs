@@ -13,11 +13,12 @@ use crate::load::{describe, LoadAverage};
 use crate::method::{Method, RunContext};
 use crate::plan::Plan;
 use crate::record::RunRecord;
-use crate::report::{current_commit, ConvergencePoint};
+use crate::report::{ConvergencePoint, BUILD_COMMIT};
 use crate::results::Results;
 use crate::rundir::{scene_manifest, RunDirectory};
 use crate::scene::{load_bundled, SceneCase};
 use crate::stats::run_stats;
+use crate::sweep::JobMode;
 use crate::ExperimentError;
 
 /// Extra parameters of a scene's run, computed from the finished results.
@@ -33,15 +34,16 @@ type ExtraImage<'a> = dyn Fn(&RenderOutput) -> Option<Image> + 'a;
 /// in machine load during the run hits every method alike (the examples' interleaving).
 /// Under an equal-samples regime the order does not change any image.
 pub struct Experiment<'a> {
-    plan: Plan,
-    methods: Vec<Method>,
+    pub(crate) plan: Plan,
+    pub(crate) methods: Vec<Method>,
     cases: Option<Vec<SceneCase>>,
     baseline: Option<String>,
     convergence: Vec<f64>,
-    parameters: Vec<(String, String)>,
+    pub(crate) parameters: Vec<(String, String)>,
     scene_parameters: Option<Box<SceneParameters<'a>>>,
-    inspect: Option<Box<Inspect<'a>>>,
+    pub(crate) inspect: Option<Box<Inspect<'a>>>,
     extra_images: Vec<(String, Box<ExtraImage<'a>>)>,
+    pub(crate) command_line: Option<Vec<String>>,
 }
 
 impl<'a> Experiment<'a> {
@@ -58,6 +60,7 @@ impl<'a> Experiment<'a> {
             scene_parameters: None,
             inspect: None,
             extra_images: Vec::new(),
+            command_line: None,
         }
     }
 
@@ -140,66 +143,136 @@ impl<'a> Experiment<'a> {
         self
     }
 
+    /// The command line a job list repeats for each run (`--emit-jobs`): the example's program
+    /// and arguments [default: this process's]. `--emit-jobs DIR` is removed from it and
+    /// `--run-one <id>` (or `--collect`) appended.
+    #[must_use]
+    pub fn command_line(mut self, argv: impl IntoIterator<Item = impl Into<String>>) -> Self {
+        self.command_line = Some(argv.into_iter().map(Into::into).collect());
+        self
+    }
+
     /// Runs every render, writes every scene's run directory (images, `run.json`, and
     /// `report.html` unless the plan says no) and returns the results. Scenes that cannot be
     /// loaded are skipped with a message on stderr; progress goes to stderr.
     ///
+    /// This runs everything in this process; [`Experiment::execute`] also honours the plan's
+    /// [`crate::JobMode`] (a job list instead).
+    ///
     /// # Errors
     /// [`ExperimentError::Invalid`] for an inconsistent experiment (no methods or seeds,
     /// duplicate names or file stems, an unknown baseline, no loadable scene, a reference of
-    /// the wrong size); [`ExperimentError::Render`] naming the scene, method and seed of a
-    /// failed render; I/O, image and report errors naming the file.
-    pub fn run(mut self) -> Result<Results, ExperimentError> {
+    /// the wrong size) or a plan whose job mode is not [`crate::JobMode::Local`];
+    /// [`ExperimentError::Render`] naming the scene, method and seed of a failed render; I/O,
+    /// image and report errors naming the file.
+    pub fn run(self) -> Result<Results, ExperimentError> {
+        if self.plan.jobs != JobMode::Local {
+            return Err(ExperimentError::Invalid(format!(
+                "{} renders in one process: it does not take --emit-jobs, --run-one or --collect",
+                self.plan.name
+            )));
+        }
+        self.run_here()
+    }
+
+    /// [`Experiment::run`] in this process.
+    pub(crate) fn run_here(mut self) -> Result<Results, ExperimentError> {
         self.validate()?;
         let started = Instant::now();
         let load_before = LoadAverage::read();
-        let commit = current_commit(".");
+        let commit = BUILD_COMMIT.to_string();
         let cases = self.load_cases()?;
-        let dirs = cases
+        let dirs = self.scene_directories(&cases)?;
+        let mut records = Vec::new();
+        for seed in self.plan.seeds.clone() {
+            for (case, dir) in cases.iter().zip(&dirs) {
+                records.extend(self.run_slot(case, dir, seed)?);
+            }
+        }
+        let mut results = self.results(&cases, records, commit);
+        results.load_before = load_before;
+        self.write_scenes(&results, &cases, &dirs)?;
+        results.load_after = LoadAverage::read();
+        results.wall_seconds = started.elapsed().as_secs_f64();
+        Ok(results)
+    }
+
+    /// Every scene's run directory, created, with its reference written.
+    pub(crate) fn scene_directories(
+        &self,
+        cases: &[SceneCase],
+    ) -> Result<Vec<RunDirectory>, ExperimentError> {
+        cases
             .iter()
             .map(|c| {
                 let dir = RunDirectory::create(self.plan.out.join(&c.name))?;
                 dir.write_reference(&c.reference)?;
                 Ok(dir)
             })
-            .collect::<Result<Vec<_>, ExperimentError>>()?;
-        let mut records = Vec::new();
-        for &seed in &self.plan.seeds {
-            for (case, dir) in cases.iter().zip(&dirs) {
-                let mut slot: Vec<RunRecord> = Vec::new();
-                for method in &self.methods {
-                    let (record, output) = self.run_one(case, dir, method, seed, &slot)?;
-                    self.write_extra_images(dir, method, seed, &output)?;
-                    if let Some(f) = self.inspect.as_mut() {
-                        f(&record, &output, dir.path());
-                    }
-                    slot.push(record);
-                }
-                records.extend(slot);
+            .collect()
+    }
+
+    /// Every method, in order, on `case` with `seed` (one slot of the interleaving): their
+    /// records, images and extra images, each seen by the inspect callback.
+    pub(crate) fn run_slot(
+        &mut self,
+        case: &SceneCase,
+        dir: &RunDirectory,
+        seed: u64,
+    ) -> Result<Vec<RunRecord>, ExperimentError> {
+        let mut slot: Vec<RunRecord> = Vec::new();
+        for method in &self.methods {
+            let (record, output) = self.run_one(case, dir, method, seed, &slot)?;
+            self.write_extra_images(dir, method, seed, &output)?;
+            if let Some(f) = self.inspect.as_mut() {
+                f(&record, &output, dir.path());
             }
+            slot.push(record);
         }
-        let mut results = Results {
+        Ok(slot)
+    }
+
+    /// The results of `records` on `cases` (no load or wall time yet).
+    pub(crate) fn results(
+        &self,
+        cases: &[SceneCase],
+        records: Vec<RunRecord>,
+        commit: String,
+    ) -> Results {
+        Results {
             plan: self.plan.clone(),
-            methods: self.methods.iter().map(|m| m.name().to_owned()).collect(),
+            methods: self.method_names(),
             baselines: self.baselines(),
             scenes: cases.iter().map(|c| c.name.clone()).collect(),
             parameters: self.parameters.clone(),
             records,
             commit,
-            load_before,
+            load_before: None,
             load_after: None,
             wall_seconds: 0.0,
-        };
-        for (case, dir) in cases.iter().zip(&dirs) {
-            self.write_scene(&results, case, dir)?;
         }
-        results.load_after = LoadAverage::read();
-        results.wall_seconds = started.elapsed().as_secs_f64();
-        Ok(results)
+    }
+
+    /// The methods' names, in order.
+    pub(crate) fn method_names(&self) -> Vec<String> {
+        self.methods.iter().map(|m| m.name().to_owned()).collect()
+    }
+
+    /// Writes every scene's `run.json` (and `report.html`).
+    pub(crate) fn write_scenes(
+        &self,
+        results: &Results,
+        cases: &[SceneCase],
+        dirs: &[RunDirectory],
+    ) -> Result<(), ExperimentError> {
+        for (case, dir) in cases.iter().zip(dirs) {
+            self.write_scene(results, case, dir)?;
+        }
+        Ok(())
     }
 
     /// Checks what [`Experiment::run`] relies on.
-    fn validate(&self) -> Result<(), ExperimentError> {
+    pub(crate) fn validate(&self) -> Result<(), ExperimentError> {
         let invalid = |m: String| Err(ExperimentError::Invalid(m));
         if self.methods.is_empty() {
             return invalid("no methods".into());
@@ -286,7 +359,7 @@ impl<'a> Experiment<'a> {
     }
 
     /// The scenes given with [`Experiment::scenes`], or the plan's bundled scenes.
-    fn load_cases(&mut self) -> Result<Vec<SceneCase>, ExperimentError> {
+    pub(crate) fn load_cases(&mut self) -> Result<Vec<SceneCase>, ExperimentError> {
         let size = self.plan.size as usize;
         let cases = match self.cases.take() {
             Some(cases) => cases,

@@ -263,7 +263,7 @@ impl LadderResults {
     pub fn write(&self, dir: &Path, measure: Measure) -> Result<String, ExperimentError> {
         std::fs::create_dir_all(dir).map_err(ExperimentError::io(dir))?;
         let csv = dir.join("ladder.csv");
-        std::fs::write(&csv, self.csv()).map_err(ExperimentError::io(&csv))?;
+        render::files::write_bytes_atomic(&csv, self.csv()).map_err(ExperimentError::io(&csv))?;
         let Some(first) = self.rungs.first() else {
             return Ok(String::new());
         };

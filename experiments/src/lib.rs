@@ -19,6 +19,7 @@
 //! | over seeds | [`Results::images`] (every seed's image read back), [`TemporalVariance`] ([`Results::temporal_variance`]), [`Results::compare`] → [`Comparison`] (medians and seed-by-seed wins) |
 //! | per-pixel maps | [`maps`]: upscaled false-colour PNGs of any map of a run ([`maps::write_map_png`], named by [`maps::map_path`]) and relative-error maps ([`Results::write_error_maps`]) |
 //! | sampling-pattern figures | [`scatter`]: point sets as dots in panels, [`scatter::cells_hit`] |
+//! | beyond one machine | `--emit-jobs DIR` / `--run-one ID` / `--collect` ([`JobMode`], [`Experiment::execute`]): the runs as a job list with a Slurm array script and a Kubernetes Indexed Job ([`sweep`]), run by `chainlight sweep run` or a cluster, collected into the same tables |
 //!
 //! # How a paper example uses it
 //!
@@ -30,7 +31,9 @@
 //!    settings template. The harness sets only `width`, `height`, `budget`, `seed` and
 //!    `threads`; the integrator and its settings are the method's.
 //! 3. Run it: `Experiment::new(plan).methods(methods).baseline("...").run()?` renders, measures,
-//!    writes `<out>/<scene>/` with `run.json` and `report.html`, and returns [`Results`].
+//!    writes `<out>/<scene>/` with `run.json` and `report.html`, and returns [`Results`];
+//!    `execute()?` instead also honours `--emit-jobs`, `--run-one` and `--collect` (it returns
+//!    `None` when there is nothing to write).
 //! 4. `results.write(&extra)` writes `results.md` (a table per scene: medians over seeds,
 //!    ratios to the baseline) with the example's own tables appended, and `results.csv`;
 //!    `results.write_with(&[TableSpec..], &extra)` writes chosen tables instead.
@@ -89,6 +92,7 @@ mod rundir;
 pub mod scatter;
 mod scene;
 mod stats;
+pub mod sweep;
 mod table;
 mod toy_study;
 
@@ -113,6 +117,7 @@ pub use results::Results;
 pub use rundir::{scene_manifest, RunDirectory};
 pub use scene::{bundled_scene_names, load_bundled, SceneCase, SCENES_DIR};
 pub use stats::{run_stats, LargeStepStats, RunStats};
+pub use sweep::{JobMode, RunId};
 pub use table::{median, median_range, ratio, Table};
 pub use temporal::TemporalVariance;
 pub use toy_study::{ToyRun, ToyStudy};

@@ -10,6 +10,7 @@ use clap::Parser;
 use crate::plan::{all_cores, seed_list, Defaults, Plan};
 use crate::regime::Regime;
 use crate::scene::bundled_scene_names;
+use crate::sweep::{JobMode, RunId};
 use crate::ExperimentError;
 
 /// Longest accepted `--time`, in seconds (a day).
@@ -77,6 +78,17 @@ pub struct CommonOptions {
     /// No report.html, and none of the extra renders its convergence plot needs.
     #[arg(long)]
     pub no_report: bool,
+    /// Render nothing: write the runs as a job list (jobs.jsonl, sweep.json, slurm.sbatch,
+    /// k8s-job.json) into DIR, one run per scene and seed (see docs/cluster.md).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["run_one", "collect"])]
+    pub emit_jobs: Option<PathBuf>,
+    /// Render one run of the job list, SCENE/seedN (every method on that scene with that
+    /// seed), and record it in the scene's run directory.
+    #[arg(long, value_name = "ID", value_parser = parse_run_id, conflicts_with = "collect")]
+    pub run_one: Option<RunId>,
+    /// Render nothing: read the job list's recorded runs and write the results and reports.
+    #[arg(long)]
+    pub collect: bool,
     /// Scenes to run (bundled: scenes/NAME.gltf); `all` is every bundled scene.
     #[arg(value_name = "SCENE")]
     pub scenes: Vec<String>,
@@ -115,11 +127,28 @@ impl CommonOptions {
         let seeds = self
             .seeds
             .unwrap_or_else(|| quick.map_or(defaults.seeds, |q| q.seeds));
+        let seeds = seed_list(self.first_seed.unwrap_or(defaults.first_seed), seeds);
+        let jobs = match (&self.emit_jobs, &self.run_one, self.collect) {
+            (Some(dir), ..) => JobMode::Emit(dir.clone()),
+            (None, Some(id), _) => {
+                if !scenes.contains(&id.scene) || !seeds.contains(&id.seed) {
+                    return Err(ExperimentError::Invalid(format!(
+                        "--run-one {id}: not a run of this sweep (scenes {scenes:?}, seeds {seeds:?})"
+                    )));
+                }
+                // The run's scene alone: an example's per-scene work before the comparison
+                // (a calibration, say) then runs for it only.
+                scenes = vec![id.scene.clone()];
+                JobMode::RunOne(id.clone())
+            }
+            (None, None, true) => JobMode::Collect,
+            (None, None, false) => JobMode::Local,
+        };
         Ok(Plan {
             name: defaults.name.clone(),
             scenes,
             regime,
-            seeds: seed_list(self.first_seed.unwrap_or(defaults.first_seed), seeds),
+            seeds,
             size: self
                 .size
                 .unwrap_or_else(|| quick.map_or(defaults.size, |q| q.size)),
@@ -131,6 +160,7 @@ impl CommonOptions {
             out: self.out.clone().unwrap_or_else(|| defaults.out.clone()),
             report: !self.no_report,
             quick: self.quick,
+            jobs,
         })
     }
 }
@@ -228,6 +258,11 @@ fn with_defaults(command: clap::Command, d: &Defaults) -> clap::Command {
     command
 }
 
+/// A run id, `SCENE/seedN`.
+fn parse_run_id(text: &str) -> Result<RunId, String> {
+    text.parse()
+}
+
 /// Seconds in `(0, 86400]`.
 pub(crate) fn parse_seconds(text: &str) -> Result<f64, String> {
     text.parse::<f64>()
@@ -321,6 +356,37 @@ mod tests {
         ] {
             let e = plan(args).unwrap_err();
             assert!(e.contains(flag), "{args:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn job_flags_select_the_job_mode() {
+        assert_eq!(plan(&[]).unwrap().jobs, JobMode::Local);
+        let emit = plan(&["--emit-jobs", "d", "--spp", "4"]).unwrap();
+        assert_eq!(emit.jobs, JobMode::Emit("d".into()));
+        let p = plan(&["--run-one", "b/seed101"]).unwrap();
+        assert_eq!(p.jobs, JobMode::RunOne(RunId::new("b", 101)));
+        assert_eq!(
+            (p.scenes, p.seeds),
+            (vec!["b".to_owned()], vec![100, 101, 102])
+        );
+        assert_eq!(plan(&["--collect"]).unwrap().jobs, JobMode::Collect);
+        // Negative controls: runs outside the sweep, malformed ids and two modes at once.
+        for (args, needle) in [
+            (&["--run-one", "c/seed100"][..], "not a run of this sweep"),
+            (&["--run-one", "a/seed99"][..], "not a run of this sweep"),
+            (&["--run-one", "a"][..], "SCENE/seedN"),
+            (
+                &["--collect", "--emit-jobs", "d"][..],
+                "cannot be used with",
+            ),
+            (
+                &["--run-one", "a/seed100", "--collect"][..],
+                "cannot be used with",
+            ),
+        ] {
+            let e = plan(args).unwrap_err();
+            assert!(e.contains(needle), "{args:?}: {e}");
         }
     }
 

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use crate::regime::Regime;
+use crate::sweep::JobMode;
 
 /// An example's defaults for the shared command-line options.
 ///
@@ -110,6 +111,8 @@ pub struct Plan {
     pub report: bool,
     /// Whether this is a `--quick` smoke run.
     pub quick: bool,
+    /// Run here, or as a job list ([`crate::Experiment::execute`]).
+    pub jobs: JobMode,
 }
 
 impl Plan {
@@ -126,6 +129,7 @@ impl Plan {
             out: defaults.out.clone(),
             report: true,
             quick: false,
+            jobs: JobMode::Local,
         }
     }
 }

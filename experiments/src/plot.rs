@@ -30,12 +30,28 @@ pub(crate) fn css_colour(i: usize) -> String {
     format!("rgb({r},{g},{b})")
 }
 
+/// The smallest time or error a log-log plot draws.
+pub const MIN_PLOTTED: f64 = 1e-150;
+
+/// The largest time or error a log-log plot draws. With [`MIN_PLOTTED`] it keeps the padded
+/// axis ranges, and their ratio, finite (plotters' logarithmic axes never finish on an
+/// infinite range).
+pub const MAX_PLOTTED: f64 = 1e150;
+
+/// True for a sample a log-log plot can draw: time and error in
+/// [`MIN_PLOTTED`]`..=`[`MAX_PLOTTED`].
+fn drawable(&(t, e): &(f64, f64)) -> bool {
+    let ok = |v: f64| (MIN_PLOTTED..=MAX_PLOTTED).contains(&v);
+    ok(t) && ok(e)
+}
+
 /// One method's lines: its name and one series of `(time, error)` samples per seed.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Curve {
     /// Legend label.
     pub name: String,
-    /// One series per seed, in increasing time; non-positive samples are not drawn.
+    /// One series per seed, in increasing time; samples outside
+    /// [`MIN_PLOTTED`]`..=`[`MAX_PLOTTED`] (zero, say) are not drawn.
     pub series: Vec<Vec<(f64, f64)>>,
 }
 
@@ -60,13 +76,13 @@ impl Axes<'static> {
 }
 
 /// The median over seeds of time and error at each sample index, when every series has the
-/// same number of samples (all positive); empty otherwise.
+/// same number of samples (all drawable); empty otherwise.
 fn median_curve(series: &[Vec<(f64, f64)>]) -> Vec<(f64, f64)> {
     let Some(first) = series.first() else {
         return Vec::new();
     };
     let n = first.len();
-    let usable = |s: &Vec<(f64, f64)>| s.len() == n && s.iter().all(|&(t, e)| t > 0.0 && e > 0.0);
+    let usable = |s: &Vec<(f64, f64)>| s.len() == n && s.iter().all(drawable);
     if !series.iter().all(usable) {
         return Vec::new();
     }
@@ -83,12 +99,13 @@ fn median_curve(series: &[Vec<(f64, f64)>]) -> Vec<(f64, f64)> {
 
 /// An SVG (without the `xmlns` attribute, for inlining in HTML) plotting error against time on
 /// log-log axes, one thin line per seed and a thick median line, coloured per curve. `None`
-/// when no curve has a sample with positive time and error.
+/// when no curve has a drawable sample (time and error in
+/// [`MIN_PLOTTED`]`..=`[`MAX_PLOTTED`]).
 ///
 /// # Errors
 /// A message when plotters fails to draw.
 pub fn log_log_svg(axes: Axes<'_>, curves: &[Curve]) -> Result<Option<String>, String> {
-    let positive = |p: &&(f64, f64)| p.0 > 0.0 && p.1 > 0.0;
+    let positive = |p: &&(f64, f64)| drawable(p);
     let points = curves
         .iter()
         .flat_map(|c| c.series.iter())
@@ -158,8 +175,8 @@ pub fn log_log_svg(axes: Axes<'_>, curves: &[Curve]) -> Result<Option<String>, S
     )))
 }
 
-/// Writes [`log_log_svg`] to `path` as a standalone SVG file (with its namespace). Returns
-/// `false`, writing nothing, when there is no positive sample to draw.
+/// Writes [`log_log_svg`] to `path` as a standalone SVG file (with its namespace, atomically).
+/// Returns `false`, writing nothing, when there is no drawable sample.
 ///
 /// # Errors
 /// [`ExperimentError::Io`] if the file cannot be written, [`ExperimentError::Invalid`] if
@@ -174,7 +191,7 @@ pub fn write_log_log_svg(
         return Ok(false);
     };
     let svg = svg.replacen("<svg", "<svg xmlns=\"http://www.w3.org/2000/svg\"", 1);
-    std::fs::write(path, svg).map_err(|source| ExperimentError::Io {
+    render::files::write_bytes_atomic(path, svg).map_err(|source| ExperimentError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -227,5 +244,39 @@ mod tests {
             series: vec![vec![(0.0, 1.0)]],
         };
         assert_eq!(log_log_svg(Axes::RELMSE_VS_TIME, &[empty]).unwrap(), None);
+    }
+
+    /// `log_log_svg` of `curves` on its own thread, failing the test if it takes more than a
+    /// minute (a hang is the failure this guards against).
+    fn plot_within_a_minute(curves: Vec<Curve>) -> Option<String> {
+        let (send, receive) = std::sync::mpsc::channel();
+        std::thread::spawn(move || send.send(log_log_svg(Axes::RELMSE_VS_TIME, &curves)));
+        receive
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .expect("the plot did not finish")
+            .unwrap()
+    }
+
+    #[test]
+    fn extreme_finite_samples_finish_and_are_left_out() {
+        for extreme in [(1.0, 1e308), (1e-308, 1.0), (f64::MAX, f64::MIN_POSITIVE)] {
+            // Alone: nothing drawable.
+            let alone = Curve {
+                name: "x".into(),
+                series: vec![vec![extreme]],
+            };
+            assert_eq!(plot_within_a_minute(vec![alone]), None, "{extreme:?}");
+            // With ordinary samples: a plot of those.
+            let mut mixed = curve("mixed", 1.0);
+            mixed.series[0].push(extreme);
+            let svg = plot_within_a_minute(vec![mixed]).expect("a plot");
+            assert!(svg.contains("mixed") && !svg.contains("inf") && !svg.contains("NaN"));
+        }
+        // The bounds themselves are drawn.
+        let edges = Curve {
+            name: "edges".into(),
+            series: vec![vec![(MIN_PLOTTED, MAX_PLOTTED), (MAX_PLOTTED, MIN_PLOTTED)]],
+        };
+        assert!(plot_within_a_minute(vec![edges]).is_some());
     }
 }

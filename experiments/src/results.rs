@@ -243,9 +243,10 @@ impl Results {
             md.push_str(extra_markdown);
         }
         let md_path = out.join("results.md");
-        std::fs::write(&md_path, &md).map_err(ExperimentError::io(&md_path))?;
+        render::files::write_bytes_atomic(&md_path, &md).map_err(ExperimentError::io(&md_path))?;
         let csv_path = out.join("results.csv");
-        std::fs::write(&csv_path, self.csv()).map_err(ExperimentError::io(&csv_path))?;
+        render::files::write_bytes_atomic(&csv_path, self.csv())
+            .map_err(ExperimentError::io(&csv_path))?;
         println!("{md}");
         eprintln!("wrote {} and {}", md_path.display(), csv_path.display());
         Ok(md_path)

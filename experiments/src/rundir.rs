@@ -10,6 +10,7 @@
 //! | `<slug>.exr`, `<slug>.png` | the first seed's image, for a quick look |
 //! | `<slug>_<name>_seed<seed>.exr`, `<slug>_<name>.exr`/`.png` | extra images of a run ([`crate::Experiment::extra_image`], e.g. `stage2`), not listed in `run.json` |
 //! | `run.json`, `report.html` | the manifest and the self-contained report |
+//! | `runs/seed<seed>.json` | a job-list run's record of every method on this scene with that seed, read by `--collect` ([`crate::JobMode`]) |
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -6,6 +6,7 @@ use clap::Args;
 use render::image_io::{self, ErrorScale};
 use render::metrics;
 
+use super::outputs::{self, Named};
 use super::{parse, CliResult};
 
 /// Arguments of `chainlight compare`.
@@ -39,7 +40,8 @@ fn default_error_map(image: &Path) -> PathBuf {
     image.with_file_name(format!("{stem}_error.png"))
 }
 
-/// Reads both images, prints the metrics and writes the error map.
+/// Checks that the error map can be written and is neither input, reads both images, prints
+/// the metrics and writes the error map.
 pub(crate) fn run(args: CompareArgs) -> CliResult<()> {
     let scale = if args.linear {
         ErrorScale::Linear {
@@ -54,6 +56,17 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<()> {
     scale
         .validate()
         .map_err(|e| format!("--error-min/--error-max: {e}"))?;
+    let map_path = args
+        .error_map
+        .clone()
+        .unwrap_or_else(|| default_error_map(&args.image));
+    outputs::check(
+        &[Named::new("the error map", &map_path)],
+        &[
+            Named::new("IMAGE", &args.image),
+            Named::new("REFERENCE", &args.reference),
+        ],
+    )?;
     let image = image_io::read_image(&args.image)?;
     let reference = image_io::read_image(&args.reference)?;
     let context = |e: metrics::MetricError| {
@@ -65,10 +78,6 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<()> {
     };
     let m = metrics::compare(&image, &reference).map_err(context)?;
     let map = metrics::relative_error_map(&image, &reference).map_err(context)?;
-    let map_path = args
-        .error_map
-        .clone()
-        .unwrap_or_else(|| default_error_map(&args.image));
     image_io::write_false_color(&map_path, &map, image.width, image.height, scale)?;
 
     println!("image      {}", args.image.display());

@@ -1,6 +1,8 @@
 //! The methods' own flags of `chainlight render` and how they become a method's settings:
 //! the chosen row's defaults ([`render::IntegratorKind::settings`]) with each flag that
-//! applies to the method set on them.
+//! applies to the method set on them. A flag given on the command line that has no effect on
+//! the chosen method is an error naming the integrators it applies to
+//! ([`super::flag_rules`]).
 
 use clap::Args;
 use pss::{RasterParams, SmallMutation};
@@ -8,8 +10,9 @@ use render::methods::{ChainSettings, MethodSettings, AUTO_LARGE_STEP_ESTIMATION}
 use render::mlt::direct::DirectPass;
 use render::mlt::dr::{DrBase, DrVariant};
 use render::mlt::LargeStepMode;
-use render::{IntegratorKind, RenderError};
+use render::IntegratorKind;
 
+use super::flag_rules::check_applicable;
 use super::parse;
 
 /// The flags of `chainlight render` that belong to one method or a family of methods.
@@ -81,7 +84,8 @@ pub(crate) struct MethodFlags {
     /// pt (and qmc), bdpt, pssmlt (and drmlt over it): Russian roulette, `off`, or `N` (from N
     /// bounces on, 0..=1024; pt: continue with probability min(1, max beta) after every bounce
     /// beyond the N-th; bdpt: min(0.95, f cos / pdf of the last bounce)) [default: 5 for pt,
-    /// 3 otherwise]. MMLT-based integrators never use roulette.
+    /// 3 otherwise]. MMLT-based paths have a fixed length and no roulette (mmlt: only its
+    /// --bdpt-normalization pass).
     #[arg(long, value_name = "off|N", value_parser = parse::roulette)]
     pub(crate) roulette: Option<render::bdpt::Roulette>,
     /// pt and bdpt: the per-pixel sampler, `independent` or `sobol` (Owen-scrambled Sobol
@@ -152,27 +156,24 @@ impl MethodFlags {
     }
 
     /// The settings of `integrator` with these flags: its row's defaults, every flag that
-    /// applies to it set.
+    /// applies to it set. `given` says which flags (by clap id, the field name) were on the
+    /// command line.
     ///
     /// # Errors
-    /// `--sampler` with an integrator that owns its numbers.
+    /// A flag given on the command line that has no effect on the resulting settings
+    /// ([`check_applicable`]).
     pub(crate) fn settings(
         &self,
         integrator: IntegratorKind,
-    ) -> Result<MethodSettings, RenderError> {
-        let mut method = integrator.settings();
-        if let Some(kind) = self.sampler {
-            if !matches!(
-                method,
-                MethodSettings::Pt(_) | MethodSettings::Bdpt(_) | MethodSettings::Pssmlt(_)
-            ) {
-                return Err(RenderError::setting(
-                    "sampler",
-                    kind,
-                    "independent or sobol with --integrator pt, bdpt or pssmlt only",
-                ));
-            }
-        }
+        given: &dyn Fn(&str) -> bool,
+    ) -> Result<MethodSettings, String> {
+        let method = self.apply(integrator.settings());
+        check_applicable(&method, given)?;
+        Ok(method)
+    }
+
+    /// `method` with every flag that applies to it set.
+    pub(crate) fn apply(&self, mut method: MethodSettings) -> MethodSettings {
         match &mut method {
             MethodSettings::Pt(s) => {
                 s.sampler = self.sampler.unwrap_or(s.sampler);
@@ -230,6 +231,6 @@ impl MethodFlags {
             MethodSettings::Lqmc(_) => {}
             _ => {}
         }
-        Ok(method)
+        method
     }
 }

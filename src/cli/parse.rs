@@ -168,9 +168,10 @@ pub(crate) fn environment(text: &str) -> Result<EnvArg, String> {
             "expected `none`, `R,G,B`, a grey value or an .exr/.hdr/.pfm map, got '{text}'"
         ));
     }
-    if !path.is_file() {
-        return Err(format!("environment map '{text}': no such file"));
-    }
+    render::files::regular_file_metadata(&path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => format!("environment map '{text}': no such file"),
+        _ => format!("environment map '{text}': {e}"),
+    })?;
     Ok(EnvArg::File(path))
 }
 

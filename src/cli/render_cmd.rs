@@ -9,12 +9,13 @@ use render::image_io;
 use render::light::EnvironmentLight;
 use render::scene::{LoadOptions, Scene};
 use render::session::{self, Budget, RenderOutput, RenderSettings};
-use render::{IntegratorKind, INTEGRATORS};
+use render::{IntegratorKind, MethodSettings, INTEGRATORS};
 
 use super::integrator::IntegratorChoice;
 use super::method_flags::MethodFlags;
+use super::outputs::{self, Named};
 use super::progress::BarProgress;
-use super::{parse, CliResult};
+use super::{parse, shard_cmd, CliResult};
 
 /// The largest `--width` / `--height`.
 const MAX_SIDE: u32 = 16_384;
@@ -25,8 +26,9 @@ static CANCEL: AtomicBool = AtomicBool::new(false);
 /// Arguments of `chainlight render`.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Ctrl-C stops the render early and still writes the image rendered so far; \
-                        a second Ctrl-C aborts without writing."
+    after_help = "Ctrl-C (or SIGTERM) stops the render early and still writes the image rendered \
+                  so far; a second one aborts without writing (files are replaced atomically: \
+                  an aborted write leaves the old file)."
 )]
 pub(crate) struct RenderArgs {
     /// A glTF 2.0 scene (.gltf or .glb) [default: the built-in Cornell box].
@@ -90,17 +92,66 @@ pub(crate) struct RenderArgs {
     /// Multiplier of the environment's radiance, 0..=1e6.
     #[arg(long, allow_negative_numbers = true, value_name = "S", default_value = "1", requires = "env", value_parser = parse::env_strength)]
     env_strength: f32,
+    /// Render only shard K of N (0 <= K < N, 2 <= N <= 4096) of the fixed work list and write its
+    /// accumulators to `--output` (a .clpart file); `chainlight merge` adds the N parts up to
+    /// the image one process would render (bit-identical under --spp). docs/cluster.md.
+    #[arg(long, allow_negative_numbers = true, value_name = "K/N", value_parser = shard_cmd::parse_shard)]
+    shard: Option<render::shard::Shard>,
 }
 
 /// The default `--spp`.
 const DEFAULT_SPP: u32 = 16;
 
-/// Checks the paths before rendering, so a long render never ends in an unwritable output.
-fn check_paths(args: &RenderArgs) -> CliResult<PathBuf> {
+/// The stem of the output file names (`out` of `out.exr`).
+fn stem(output: &Path) -> String {
+    output
+        .file_stem()
+        .map_or_else(|| "chainlight".into(), |x| x.to_string_lossy().into_owned())
+}
+
+/// The MIS-weighted image of BDPT strategy `(s, t)`: `<stem>_s<S>_t<T>.exr` next to `output`.
+fn strategy_path(output: &Path, (s, t): (u8, u8)) -> PathBuf {
+    output.with_file_name(format!("{}_s{s}_t{t}.exr", stem(output)))
+}
+
+/// The delayed-rejection stage map: `<stem>_stage2.exr` next to `output` (and its `.png`).
+fn stage_map_path(output: &Path) -> PathBuf {
+    output.with_file_name(format!("{}_stage2.exr", stem(output)))
+}
+
+/// Every file a render of `settings` writes besides the EXR and its PNG preview: the strategy
+/// images of `bdpt --strategy-images`, the stage map of `drmlt`.
+fn side_files(output: &Path, settings: &RenderSettings) -> Vec<Named> {
+    let mut files = Vec::new();
+    if matches!(settings.method, MethodSettings::Bdpt(b) if b.strategy_images) {
+        for strategy in render::bdpt::strategy_list(settings.max_depth) {
+            files.push(Named::new(
+                "the strategy image",
+                strategy_path(output, strategy),
+            ));
+        }
+    }
+    if settings.integrator() == IntegratorKind::Drmlt {
+        let map = stage_map_path(output);
+        files.push(Named::new(
+            "the DR stage map preview",
+            map.with_extension("png"),
+        ));
+        files.push(Named::new("the DR stage map", map));
+    }
+    files
+}
+
+/// Checks the paths before rendering, so a long render never ends in an unwritable output and
+/// never overwrites its own inputs: the scene and the environment map are regular files, and
+/// every output (the EXR, its PNG preview and the side files; with `--shard`, the part file
+/// alone) can be written and is not an input. Returns the PNG preview's path.
+fn check_paths(args: &RenderArgs, settings: &RenderSettings) -> CliResult<PathBuf> {
     let is_ext = |p: &Path, ext: &str| {
         p.extension()
             .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case(ext))
     };
+    let mut inputs = Vec::new();
     if let Some(scene) = &args.scene {
         if !(is_ext(scene, "gltf") || is_ext(scene, "glb")) {
             return Err(format!(
@@ -109,9 +160,19 @@ fn check_paths(args: &RenderArgs) -> CliResult<PathBuf> {
             )
             .into());
         }
-        if !scene.is_file() {
-            return Err(format!("SCENE '{}': no such file", scene.display()).into());
-        }
+        render::files::regular_file_metadata(scene).map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => format!("SCENE '{}': no such file", scene.display()),
+            _ => format!("SCENE '{}': {e}", scene.display()),
+        })?;
+        inputs.push(Named::new("SCENE", scene));
+    }
+    if let Some(parse::EnvArg::File(map)) = &args.env {
+        inputs.push(Named::new("--env", map));
+    }
+    if args.shard.is_some() {
+        // A shard writes only its part file (no preview, no side files).
+        shard_cmd::check_part_path(&args.output, &inputs)?;
+        return Ok(args.output.with_extension("png"));
     }
     if !is_ext(&args.output, "exr") {
         return Err(format!(
@@ -133,43 +194,17 @@ fn check_paths(args: &RenderArgs) -> CliResult<PathBuf> {
         .into());
     }
     let png = args.output.with_extension("png");
-    probe_writable(&args.output, "--output")?;
-    probe_writable(&png, "the PNG preview")?;
+    let mut outputs = vec![
+        Named::new("--output", &args.output),
+        Named::new("the PNG preview", &png),
+    ];
+    outputs.extend(side_files(&args.output, settings));
+    outputs::check(&outputs, &inputs)?;
     Ok(png)
 }
 
-/// Fails unless `path` can be written, without changing anything: an existing regular file is
-/// opened for writing without truncation; a missing one is created and removed again. So a
-/// read-only directory, an output path that is a directory or an unwritable file is reported
-/// before rendering, not after.
-fn probe_writable(path: &Path, what: &str) -> CliResult<()> {
-    let fail = |why: &dyn std::fmt::Display| -> Box<dyn std::error::Error + Send + Sync> {
-        format!("{what} '{}' cannot be written: {why}", path.display()).into()
-    };
-    match std::fs::metadata(path) {
-        Ok(meta) if meta.is_dir() => Err(fail(&"it is a directory")),
-        Ok(meta) if !meta.is_file() => Err(fail(&"it is not a regular file")),
-        Ok(_) => {
-            std::fs::OpenOptions::new()
-                .write(true)
-                .open(path)
-                .map_err(|e| fail(&e))?;
-            Ok(())
-        }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(path)
-                .map_err(|e| fail(&e))?;
-            std::fs::remove_file(path).map_err(|e| fail(&e))
-        }
-        Err(e) => Err(fail(&e)),
-    }
-}
-
-/// Builds the session settings from validated flags.
-fn settings(args: &RenderArgs) -> CliResult<RenderSettings> {
+/// Builds the session settings from validated flags; `given` says which flags were typed.
+fn settings(args: &RenderArgs, given: &dyn Fn(&str) -> bool) -> CliResult<RenderSettings> {
     let budget = match args.time {
         Some(time) => Budget::Time(time),
         None => Budget::SamplesPerPixel(args.spp.unwrap_or(DEFAULT_SPP)),
@@ -185,14 +220,18 @@ fn settings(args: &RenderArgs) -> CliResult<RenderSettings> {
         threads,
         seed: args.seed,
         max_depth: args.max_depth,
-        method: args.method.settings(args.integrator.info.kind)?,
+        method: args.method.settings(args.integrator.info.kind, given)?,
     })
 }
 
-/// Renders, writes the EXR and the PNG preview, prints a summary.
-pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
-    let png_path = check_paths(&args)?;
-    let settings = settings(&args)?;
+/// Renders, writes the EXR, the PNG preview and the side files (or, with `--shard`, the
+/// part file), prints a summary. `given` says which flags were typed on the command line.
+pub(crate) fn run(args: RenderArgs, given: &dyn Fn(&str) -> bool) -> CliResult<()> {
+    let settings = settings(&args, given)?;
+    if args.shard.is_some() && args.method.strategy_images {
+        return Err("--strategy-images cannot be combined with --shard (a part holds only the image's accumulators)".into());
+    }
+    let png_path = check_paths(&args, &settings)?;
 
     let mut scene = match &args.scene {
         None => Scene::cornell_box(settings.width, settings.height),
@@ -210,10 +249,21 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
                 EnvironmentLight::constant(render::glam::Vec3::from(*rgb) * args.env_strength)
                     .rotated(args.env_rotate),
             ),
-            parse::EnvArg::File(path) => Some(
-                EnvironmentLight::from_file(path, args.env_strength, args.env_rotate)
-                    .map_err(|e| format!("--env: {e}"))?,
-            ),
+            parse::EnvArg::File(path) => {
+                let env = EnvironmentLight::from_file(path, args.env_strength, args.env_rotate)
+                    .map_err(|e| format!("--env: {e}"))?;
+                let dropped = env.dropped_texels();
+                if !dropped.is_empty() {
+                    scene.warnings.push(format!(
+                        "--env '{}': {} texels with a NaN or infinite channel and {} with a \
+                         negative channel; those channels count as 0",
+                        path.display(),
+                        dropped.non_finite,
+                        dropped.negative
+                    ));
+                }
+                Some(env)
+            }
         };
         scene.set_environment(environment);
     }
@@ -223,8 +273,11 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
 
     let progress = BarProgress::new("samples");
     let bar = progress.handle();
+    // Ctrl-C, SIGTERM and SIGHUP (the `termination` feature of `ctrlc`) all stop the render
+    // and write what it has; a second one aborts, leaving every output file as it was.
     if let Err(e) = ctrlc::set_handler(move || {
         if CANCEL.swap(true, Ordering::SeqCst) {
+            render::files::remove_temporaries();
             eprintln!("\ninterrupted twice: aborting without writing an image");
             std::process::exit(130);
         }
@@ -249,35 +302,34 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
         args.integrator.info.name,
         settings.threads
     );
-    let output = session::render(&scene, &settings, &progress, &CANCEL);
+    let shard = args.shard.unwrap_or(render::shard::Shard::WHOLE);
+    let output = session::render_shard(&scene, &settings, shard, &progress, &CANCEL);
     progress.finish();
     let output = output?;
     for note in &output.notes {
         eprintln!("note: {note}");
     }
-    if args.method.strategy_images && settings.integrator() != IntegratorKind::Bdpt {
-        eprintln!("warning: --strategy-images applies to --integrator bdpt only; ignored");
-    }
-    for ((s, t), img) in &output.strategy_images {
-        let stem = args
-            .output
-            .file_stem()
-            .map_or_else(|| "chainlight".into(), |x| x.to_string_lossy().into_owned());
-        let path = args.output.with_file_name(format!("{stem}_s{s}_t{t}.exr"));
-        image_io::write_exr(&path, img)?;
-        println!("wrote       {}", path.display());
-    }
-    if let Some(map) = &output.stage_map {
-        // The delayed-rejection stage map (share of each pixel's estimate from second-stage
-        // moves, 0..=1) as `<stem>_stage2.exr` and a PNG preview.
-        let stem = args
-            .output
-            .file_stem()
-            .map_or_else(|| "chainlight".into(), |x| x.to_string_lossy().into_owned());
-        let path = args.output.with_file_name(format!("{stem}_stage2.exr"));
-        image_io::write_exr(&path, map)?;
-        image_io::write_png(path.with_extension("png"), map, 0.0)?;
-        println!("wrote       {} (DR stage map)", path.display());
+    if let Some(shard) = args.shard {
+        let environment = format!(
+            "{:?} rotate {} strength {}",
+            args.env, args.env_rotate, args.env_strength
+        );
+        let identity = shard_cmd::scene_identity(args.scene.as_deref(), &environment)?;
+        shard_cmd::write_render_part(
+            &args.output,
+            &settings,
+            args.integrator.info.name,
+            identity,
+            shard,
+            &output,
+        )?;
+        println!(
+            "wrote       {} (shard {}/{}; merge the parts with `chainlight merge`)",
+            args.output.display(),
+            shard.index,
+            shard.count
+        );
+        return Ok(());
     }
     if output.cancelled {
         eprintln!(
@@ -286,10 +338,49 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
             per_pixel(&output, &settings)
         );
     }
-    image_io::write_exr(&args.output, &output.image)?;
-    image_io::write_png(&png_path, &output.image, args.exposure)?;
-    print_summary(&args, &settings, &output, &png_path);
-    Ok(())
+    // The image first: a side file that cannot be written loses nothing else. Every write is
+    // attempted; the failures are reported together at the end.
+    let mut failed = Vec::new();
+    let mut written = Vec::new();
+    let mut write = |path: &Path, what: &str, result: Result<(), image_io::ImageError>| match result
+    {
+        Ok(()) => written.push(format!("{}{what}", path.display())),
+        Err(e) => failed.push(e.to_string()),
+    };
+    write(
+        &args.output,
+        "",
+        image_io::write_exr(&args.output, &output.image),
+    );
+    write(
+        &png_path,
+        "",
+        image_io::write_png(&png_path, &output.image, args.exposure),
+    );
+    for (strategy, img) in &output.strategy_images {
+        let path = strategy_path(&args.output, *strategy);
+        write(&path, "", image_io::write_exr(&path, img));
+    }
+    if let Some(map) = &output.stage_map {
+        // The delayed-rejection stage map (share of each pixel's estimate from second-stage
+        // moves, 0..=1) and a PNG preview.
+        let path = stage_map_path(&args.output);
+        write(&path, " (DR stage map)", image_io::write_exr(&path, map));
+        let png = path.with_extension("png");
+        write(&png, "", image_io::write_png(&png, map, 0.0));
+    }
+    print_summary(&args, &settings, &output, &written);
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} of {} files could not be written (the others were): {}",
+            failed.len(),
+            failed.len() + written.len(),
+            failed.join("; ")
+        )
+        .into())
+    }
 }
 
 fn scene_name(args: &RenderArgs) -> String {
@@ -303,7 +394,12 @@ fn per_pixel(output: &RenderOutput, settings: &RenderSettings) -> f64 {
     output.samples as f64 / (f64::from(settings.width) * f64::from(settings.height))
 }
 
-fn print_summary(args: &RenderArgs, settings: &RenderSettings, output: &RenderOutput, png: &Path) {
+fn print_summary(
+    args: &RenderArgs,
+    settings: &RenderSettings,
+    output: &RenderOutput,
+    written: &[String],
+) {
     let secs = output.elapsed.as_secs_f64();
     let rate = if secs > 0.0 {
         output.samples as f64 / secs
@@ -337,6 +433,7 @@ fn print_summary(args: &RenderArgs, settings: &RenderSettings, output: &RenderOu
     println!("rate        {rate:.0} samples/s");
     println!("non-finite  {} samples dropped", output.dropped_nonfinite);
     println!("elapsed     {secs:.2} s");
-    println!("wrote       {}", args.output.display());
-    println!("wrote       {}", png.display());
+    for file in written {
+        println!("wrote       {file}");
+    }
 }

@@ -1,11 +1,12 @@
 //! `chainlight report`: a self-contained HTML comparison report from a run directory or from a
 //! reference EXR and result EXRs.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 use experiments::report::{self, RunManifest, MANIFEST_FILE};
 
+use super::outputs::{self, Named};
 use super::CliResult;
 
 /// Arguments of `chainlight report`.
@@ -34,7 +35,7 @@ pub(crate) fn run(args: ReportArgs) -> CliResult<()> {
             let mut manifest = RunManifest::from_images(
                 reference.clone(),
                 &args.inputs,
-                report::current_commit("."),
+                report::BUILD_COMMIT.to_string(),
             );
             if let Some(title) = &args.title {
                 manifest.title.clone_from(title);
@@ -51,12 +52,17 @@ pub(crate) fn run(args: ReportArgs) -> CliResult<()> {
                 .into());
             }
             let dir = args.inputs[0].clone();
-            if !dir.join(MANIFEST_FILE).is_file() {
-                return Err(format!(
-                    "{}: no {MANIFEST_FILE} here (to compare images, pass --reference REF.exr)",
-                    dir.display()
-                )
-                .into());
+            let manifest_file = dir.join(MANIFEST_FILE);
+            match render::files::regular_file_metadata(&manifest_file) {
+                Ok(_) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    return Err(format!(
+                        "{}: no {MANIFEST_FILE} here (to compare images, pass --reference REF.exr)",
+                        dir.display()
+                    )
+                    .into())
+                }
+                Err(e) => return Err(format!("{}: {e}", manifest_file.display()).into()),
             }
             let mut manifest = RunManifest::load(&dir)?;
             if let Some(title) = &args.title {
@@ -67,7 +73,25 @@ pub(crate) fn run(args: ReportArgs) -> CliResult<()> {
         }
     };
     let output = args.output.clone().unwrap_or(default_output);
+    outputs::refuse_inputs(
+        &[Named::new("the report", &output)],
+        &inputs(&manifest, &run_dir),
+    )?;
     let written = report::write_report(&manifest, &run_dir, &output)?;
     println!("report     {}", written.display());
     Ok(())
+}
+
+/// The files a report of `manifest` reads: `run.json` (of a run directory), the reference and
+/// every method's images.
+fn inputs(manifest: &RunManifest, run_dir: &Path) -> Vec<Named> {
+    let mut files: Vec<Named> = manifest
+        .image_files(run_dir)
+        .into_iter()
+        .map(|(what, path)| Named::new(what, path))
+        .collect();
+    if !run_dir.as_os_str().is_empty() {
+        files.push(Named::new("the run manifest", run_dir.join(MANIFEST_FILE)));
+    }
+    files
 }

@@ -86,3 +86,76 @@ pub fn signal_after_start(
     let output = child.wait_with_output().unwrap();
     (output, rest, signalled.elapsed())
 }
+
+/// Runs `chainlight args` in `dir` (the current directory if `None`), failing the test if it
+/// has not exited after `limit` (it is killed): for inputs that used to hang the commands.
+pub fn chainlight_within(args: &[&str], dir: Option<&Path>, limit: std::time::Duration) -> Output {
+    use std::process::Stdio;
+    let mut command = Command::new(env!("CARGO_BIN_EXE_chainlight"));
+    command
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    if let Some(dir) = dir {
+        command.current_dir(dir);
+    }
+    let mut child = command.spawn().expect("the chainlight binary runs");
+    let start = std::time::Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let output = child.wait_with_output().unwrap();
+            panic!(
+                "{args:?} did not finish within {limit:?}; stderr: {}",
+                stderr(&output)
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+/// Writes a valid 1x1 EXR at `path` whose data and display windows are then rewritten to
+/// declare `width x height` pixels: a few hundred bytes, like a hostile file.
+pub fn exr_declaring(path: &Path, width: i32, height: i32) {
+    render::image_io::write_exr(path, &render::Image::new(1, 1)).unwrap();
+    let mut bytes = std::fs::read(path).unwrap();
+    for attribute in [&b"dataWindow\0box2i\0"[..], b"displayWindow\0box2i\0"] {
+        let at = bytes
+            .windows(attribute.len())
+            .position(|w| w == attribute)
+            .expect("the attribute is in the header")
+            + attribute.len()
+            + 4;
+        // box2i: x_min, y_min, x_max, y_max as little-endian i32.
+        bytes[at + 8..at + 12].copy_from_slice(&(width - 1).to_le_bytes());
+        bytes[at + 12..at + 16].copy_from_slice(&(height - 1).to_le_bytes());
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// Writes a small valid EXR (`w x h`, grey `v`) at `path`.
+pub fn grey_exr(path: &Path, w: usize, h: usize, v: f32) {
+    let image = render::Image::from_pixels(w, h, vec![[v; 3]; w * h]).unwrap();
+    render::image_io::write_exr(path, &image).unwrap();
+}
+
+/// Makes a FIFO at `path` (`mkfifo`).
+#[cfg(unix)]
+pub fn mkfifo(path: &Path) {
+    let status = Command::new("mkfifo").arg(path).status().unwrap();
+    assert!(status.success(), "mkfifo {}", path.display());
+}
+
+/// The names in `dir`, sorted.
+pub fn entries(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}

@@ -15,8 +15,8 @@
 //! Pairwise and finite-state checks are identities, checked to rounding (`1e-9` and `1e-12`
 //! relative). Stationarity tests: independent exact starts, so the final states are i.i.d.
 //! from pi under a correct kernel and Pearson's p-value is uniform. Splat-weight tests:
-//! Hotelling's statistic of the mean splat-weighted histogram, asymptotically chi-square
-//! (`mcmc_core::testing::splat_weights`). Comparisons (vanishing acceptance, autocorrelation
+//! the harness's chi-square statistic of the mean splat-weighted histogram
+//! (`mcmc_core::testing::SplatMoments::test`). Comparisons (vanishing acceptance, autocorrelation
 //! times): one-sided Welch z-tests on per-chain means of independent chains, which must reject
 //! "no improvement". All [`STAT_TESTS`] of them run at the Sidak level
 //! `1 - (1 - ALPHA)^(1/STAT_TESTS)` with `ALPHA = 0.01`: a correct kernel fails a stationarity

@@ -9,8 +9,8 @@
 //! every statistic.
 //!
 //! # Statistics
-//! As `tests/splat_weights.rs`: [`STARTS`] exact starts, one step each, Hotelling's
-//! statistic of the mean splat-weighted histogram against the bin probabilities. The
+//! As `tests/splat_weights.rs`: [`STARTS`] exact starts, one step each, the harness's
+//! chi-square statistic of the mean splat-weighted histogram against the bin probabilities. The
 //! combined estimator's weights do not sum to 1 per step (`(1 - a) m(x) + (a + 1) m(y)` on a
 //! large step), only in expectation over `x ~ pi`, which is what the check tests. The
 //! [`SPLAT_TESTS`] checks that must pass run at the Sidak level for an overall 0.01; a broken

@@ -7,9 +7,11 @@
 //!
 //! # Statistics
 //! Each check runs [`STARTS`] independent exact starts, one step each, and tests the mean
-//! splat-weighted histogram against the bin probabilities with Hotelling's statistic, the
-//! covariance estimated from the per-start contributions (`mcmc_core::testing::splat_weights`
-//! derives it). Under the contract the p-value is asymptotically uniform. This file runs
+//! splat-weighted histogram against the bin probabilities with the harness's chi-square
+//! statistic, its covariance taken from the per-start contributions at the scale of the bin
+//! probabilities (`mcmc_core::testing::SplatMoments::test` derives it). Under the contract
+//! the p-value is asymptotically uniform (`tests/splat_weight_calibration.rs` checks it over
+//! a seed sweep). This file runs
 //! [`SPLAT_TESTS`] checks that must pass, each at the Sidak level
 //! `1 - 0.99^(1/SPLAT_TESTS)`, so the probability of any false failure is 0.01; seeds are
 //! fixed, so the outcome is deterministic. A broken weighting counts as caught when its

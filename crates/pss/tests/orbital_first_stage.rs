@@ -12,8 +12,9 @@ mod orbital_support;
 use std::f64::consts::{PI, TAU};
 
 use mcmc_core::testing::chi_square_test;
+use mcmc_core::testing::ks_one_sample;
 use mcmc_core::Proposal;
-use orbital_support::{angle_bin, ks_one_sample, level, report, OVERWHELMING, TESTS};
+use orbital_support::{angle_bin, level, report, OVERWHELMING, TESTS};
 use pss::{torus_displacement, PairwiseKelemen, PairwiseKelemenParams};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
@@ -87,8 +88,8 @@ fn polar_kelemen_radius_and_angle_match_the_density() {
     let params = PairwiseKelemenParams::drmlt2020();
     let step = PairwiseKelemen::new(params);
     let moves = polar_moves(&step, 21);
-    let mut radii: Vec<f64> = moves.iter().map(|m| m.0).collect();
-    let (d, p) = ks_one_sample(&mut radii, |r| params.radius_cdf(r));
+    let radii: Vec<f64> = moves.iter().map(|m| m.0).collect();
+    let (d, p) = ks_one_sample(&radii, |r| params.radius_cdf(r));
     println!("polar Kelemen radius, KS vs log-uniform CDF: D = {d:.2e}, p = {p:.3}");
     assert!(p >= level(), "radius KS: p = {p}");
     let probabilities = polar_bin_probabilities(&step, params);
@@ -107,8 +108,8 @@ fn polar_kelemen_negative_controls_are_rejected() {
         22,
     );
     let unscaled = PairwiseKelemenParams::kelemen2002();
-    let mut radii: Vec<f64> = scaled.iter().map(|m| m.0).collect();
-    let (_, p) = ks_one_sample(&mut radii, |r| unscaled.radius_cdf(r));
+    let radii: Vec<f64> = scaled.iter().map(|m| m.0).collect();
+    let (_, p) = ks_one_sample(&radii, |r| unscaled.radius_cdf(r));
     println!("negative control: 1.9-scaled radii vs the unscaled law: KS p = {p:.3e}");
     assert!(p < OVERWHELMING);
     // A wrong radius density with the right support: uniform on [r_min, r_max].

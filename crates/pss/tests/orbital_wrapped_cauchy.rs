@@ -10,10 +10,10 @@ mod orbital_support;
 
 use std::f64::consts::{PI, TAU};
 
-use mcmc_core::testing::{chi_square_test, chi_square_two_sample, ChiSquareReport};
+use mcmc_core::testing::{chi_square_test, chi_square_two_sample, ks_one_sample, ChiSquareReport};
 use orbital_support::{
-    angle_bin, angle_bin_probabilities, ks_one_sample, level, report, ANGLE_BINS, ANGLE_SAMPLES,
-    OVERWHELMING, TESTS,
+    angle_bin, angle_bin_probabilities, level, report, ANGLE_BINS, ANGLE_SAMPLES, OVERWHELMING,
+    TESTS,
 };
 use pss::{WrappedCauchy, RIOUX_LAVOIE2020_RHO};
 use rand::{RngExt, SeedableRng};
@@ -55,14 +55,14 @@ fn reference_sampler(rho: f64, rng: &mut Pcg64) -> f64 {
 fn wrapped_cauchy_sampler_matches_its_density_and_cdf() {
     for (i, rho) in [0.3, RIOUX_LAVOIE2020_RHO, 0.95].into_iter().enumerate() {
         let wc = WrappedCauchy::new(rho).unwrap();
-        let mut samples = wrapped_cauchy_samples(|rng| wc.sample(rng), 100 + i as u64);
+        let samples = wrapped_cauchy_samples(|rng| wc.sample(rng), 100 + i as u64);
         let chi = angle_chi_square(&samples, rho);
         report(
             &format!("wrapped Cauchy rho {rho:.4}, chi-square vs eq. 10"),
             &chi,
         );
         chi.assert_passes("wrapped Cauchy sampler vs eq. 10", TESTS);
-        let (d, p) = ks_one_sample(&mut samples, |t| wc.cdf(t));
+        let (d, p) = ks_one_sample(&samples, |t| wc.cdf(t));
         println!("wrapped Cauchy rho {rho:.4}, KS vs closed-form CDF: D = {d:.2e}, p = {p:.3}");
         assert!(
             p >= level(),
@@ -114,7 +114,6 @@ fn wrapped_cauchy_negative_controls_are_rejected() {
         &wrong_sampler,
     );
     assert!(wrong_sampler.p_value < OVERWHELMING, "{wrong_sampler}");
-    let mut halved = halved;
-    let (_, p) = ks_one_sample(&mut halved, |t| wc.cdf(t));
+    let (_, p) = ks_one_sample(&halved, |t| wc.cdf(t));
     assert!(p < OVERWHELMING, "KS misses the halved quantile: p = {p}");
 }

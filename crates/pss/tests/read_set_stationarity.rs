@@ -246,7 +246,7 @@ fn asymmetric_proposal_treated_as_symmetric_fails() {
 
 /// The observer contract on read-set targets: one lazy PSSMLT step from each exact start
 /// splats `1 - a` on the current state and `a` on the (lazily evaluated) candidate, and the
-/// splat-weighted histogram matches pi (Hotelling's statistic, `mcmc_core::testing`).
+/// splat-weighted histogram matches pi (the harness's splat-weight statistic, `mcmc_core::testing`).
 #[test]
 fn lazy_pssmlt_splat_weights_keep_the_contract() {
     let params = SplatParams::new(STARTS, 50);

@@ -15,7 +15,7 @@
 //! * Non-finite samples are counted and dropped, never splatted.
 
 use glam::{UVec2, Vec2, Vec3};
-use mcmc_core::render_loop::{SplatGrid, SplatSink};
+use mcmc_core::render_loop::{ExactSplatGrid, SplatGrid, DEFAULT_FRACTION_BITS};
 
 use crate::image::Image;
 
@@ -238,6 +238,23 @@ impl FilmTile {
     }
 }
 
+/// A shared exact splat grid for splats in radiance units (light tracing): its resolution is
+/// set from `emission_bound` (`render::light::Lights::emission_bound`), so that a splat of
+/// the scene's brightest emission uses about 56 bits below the point of the 128-bit sums:
+/// relative resolution about `1e-17` of that emission, pixel sums up to about `1e21` times it.
+/// The sums do not depend on the order of the splats (the same bits for any thread count and
+/// any split of the work).
+#[must_use]
+pub fn exact_splat_grid(width: usize, height: usize, emission_bound: f32) -> ExactSplatGrid {
+    let e = if emission_bound.is_finite() && emission_bound > 0.0 {
+        f64::from(emission_bound).log2().ceil() as i64
+    } else {
+        0
+    };
+    let bits = (i64::from(DEFAULT_FRACTION_BITS) - e).clamp(0, 120) as u32;
+    ExactSplatGrid::with_fraction_bits(width, height, bits)
+}
+
 /// The image being rendered: weighted pixel-sample sums plus splat sums.
 #[derive(Clone, Debug)]
 pub struct Film {
@@ -246,7 +263,8 @@ pub struct Film {
     filter: Filter,
     sum: Vec<[f64; 3]>,
     weight: Vec<f64>,
-    splat: SplatGrid,
+    /// Splat sums, allocated by the first splat merge (PT needs none).
+    splat: Option<Vec<[f64; 3]>>,
     /// Pixel samples merged.
     pub samples: u64,
     /// Splats merged.
@@ -266,11 +284,50 @@ impl Film {
             filter,
             sum: vec![[0.0; 3]; n],
             weight: vec![0.0; n],
-            splat: SplatGrid::new(width, height),
+            splat: None,
             samples: 0,
             splats: 0,
             nonfinite: 0,
         }
+    }
+
+    /// A film holding given pixel-sample sums (`Σ w L` and `Σ w` per pixel, row-major; e.g.
+    /// read back from a partial render), no splats; `None` if the lengths are not
+    /// `width * height`.
+    #[must_use]
+    pub fn from_sums(
+        width: usize,
+        height: usize,
+        filter: Filter,
+        sum: Vec<[f64; 3]>,
+        weight: Vec<f64>,
+    ) -> Option<Self> {
+        let n = width * height;
+        (sum.len() == n && weight.len() == n).then(|| Self {
+            sum,
+            weight,
+            ..Self::new_empty(width, height, filter)
+        })
+    }
+
+    fn new_empty(width: usize, height: usize, filter: Filter) -> Self {
+        Self {
+            width,
+            height,
+            filter,
+            sum: Vec::new(),
+            weight: Vec::new(),
+            splat: None,
+            samples: 0,
+            splats: 0,
+            nonfinite: 0,
+        }
+    }
+
+    /// The pixel-sample sums: `Σ w L` and `Σ w` per pixel, row-major.
+    #[must_use]
+    pub fn sums(&self) -> (&[[f64; 3]], &[f64]) {
+        (&self.sum, &self.weight)
     }
 
     /// Width in pixels.
@@ -324,7 +381,23 @@ impl Film {
 
     /// Adds a work unit's splat sums (`splats` counts the grids' contributions merged).
     pub fn merge_splats(&mut self, grid: &SplatGrid) {
-        self.splat.merge(grid);
+        self.add_splat_sums(grid.pixels());
+    }
+
+    /// Adds the sums of a shared exact splat grid ([`exact_splat_grid`]); counts as one
+    /// merged grid.
+    pub fn merge_exact_splats(&mut self, grid: &ExactSplatGrid) {
+        self.add_splat_sums(&grid.pixels());
+    }
+
+    fn add_splat_sums(&mut self, sums: &[[f64; 3]]) {
+        let n = self.width * self.height;
+        let layer = self.splat.get_or_insert_with(|| vec![[0.0; 3]; n]);
+        for (a, b) in layer.iter_mut().zip(sums) {
+            for c in 0..3 {
+                a[c] += b[c];
+            }
+        }
         self.splats += 1;
     }
 
@@ -343,12 +416,12 @@ impl Film {
     pub fn image_checked(&self, splat_scale: f64) -> (Image, u64) {
         let mut img = Image::new(self.width, self.height);
         let mut dropped = 0;
-        let splats = self.splat.pixels();
         for (i, px) in img.pixels.iter_mut().enumerate() {
             let w = self.weight[i];
+            let splat = self.splat.as_ref().map_or([0.0; 3], |s| s[i]);
             let v: [f32; 3] = std::array::from_fn(|c| {
                 let mean = if w > 0.0 { self.sum[i][c] / w } else { 0.0 };
-                (mean + splats[i][c] * splat_scale) as f32
+                (mean + splat[c] * splat_scale) as f32
             });
             *px = if v.iter().all(|c| c.is_finite()) {
                 v

@@ -16,7 +16,7 @@
 //! | drivers | [`integrator::pt_driver`], [`bdpt::render_bdpt`], [`mlt`] |
 //! | integrators | [`integrator::pt`], [`bdpt`] (subpaths, connections, MIS) |
 //! | scene | [`scene`], [`camera`], [`light`], [`material`], [`bvh`], [`mesh`] |
-//! | foundations | [`autodiff`], [`sampler`], [`film`], [`image`], [`image_io`], [`metrics`], [`budget`], [`frame`], [`warp`], [`error`] |
+//! | foundations | [`autodiff`], [`sampler`], [`film`], [`image`], [`image_io`], [`files`], [`metrics`], [`budget`], [`frame`], [`warp`], [`error`] |
 //!
 //! # Example
 //! ```
@@ -45,6 +45,7 @@ pub mod bundled;
 pub mod bvh;
 pub mod camera;
 pub mod error;
+pub mod files;
 pub mod film;
 pub mod frame;
 pub mod image;
@@ -60,6 +61,7 @@ pub mod pathspace_scene;
 pub mod sampler;
 pub mod scene;
 pub mod session;
+pub mod shard;
 #[cfg(test)]
 mod test_util;
 pub mod warp;

@@ -7,7 +7,7 @@
 //! (Dirac lobes only) or purely non-specular. [`PathSpaceScene::new`] maps render's scene onto
 //! it and refuses, with an error naming the feature, what it cannot represent:
 //!
-//! - a thin-lens camera (`--aperture`) or a moving camera (the lens perturbation of RA 3.3
+//! - a thin-lens camera (the camera node's `aperture_radius` extra) or a moving camera (the lens perturbation of RA 3.3
 //!   needs a fixed pinhole vertex `x_1`);
 //! - punctual lights (`KHR_lights_punctual`: point, spot, directional) and environment lights
 //!   (including the default environment of a scene without lights: pass `--env none`), which
@@ -91,7 +91,9 @@ impl<'a> PathSpaceScene<'a> {
             return Err(RenderError::setting(
                 "integrator",
                 "pathmlt",
-                "a pinhole camera (pathmlt supports a pinhole only: drop --aperture / the scene's thin lens)",
+                "a pinhole camera (pathmlt supports a pinhole only: remove the camera node's \
+                 `aperture_radius` / `focus_distance` extras from the scene, set \
+                 `aperture_radius` to 0, or pick another --integrator)",
             ));
         }
         let (open, close) = camera.shutter();

@@ -5,6 +5,7 @@
 //! CONTRACT (kept stable for the CLI): `RenderSettings`, `IntegratorKind`, `Progress`,
 //! `RenderOutput` and `render(scene, settings, progress, cancel)`.
 
+use crate::shard::Shard;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
@@ -104,8 +105,33 @@ pub fn render(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<RenderOutput, RenderError> {
+    render_shard(scene, settings, Shard::WHOLE, progress, cancel)
+}
+
+/// As [`render`], rendering only shard `shard.index` of `shard.count` of the method's fixed
+/// work list ([`crate::shard`]): the output's [`RenderOutput::partial`] holds the shard's
+/// accumulators, which add up with the other shards' (see [`crate::shard::Partial::add`]) to
+/// exactly the accumulators of the whole render; its `image` is the shard's own (not a
+/// useful picture by itself).
+///
+/// # Errors
+/// As [`render`]; [`RenderError::InvalidSetting`] for a shard index not below the count.
+pub fn render_shard(
+    scene: &Scene,
+    settings: &RenderSettings,
+    shard: Shard,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> Result<RenderOutput, RenderError> {
     let start = Instant::now();
     validate(settings)?;
+    if shard.count == 0 || shard.index >= shard.count {
+        return Err(RenderError::setting(
+            "shard",
+            format!("{}/{}", shard.index, shard.count),
+            "K/N with 0 <= K < N",
+        ));
+    }
     crate::methods::memory::check(settings, scene)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
@@ -130,6 +156,7 @@ pub fn render(
         start,
         progress,
         cancel,
+        shard,
     };
     pool.install(|| method.render(scene, settings, &run))
 }

@@ -79,6 +79,7 @@ fn replicate(seed: u64, chain_min_depth: u32, pass: Option<(SamplerKind, u32)>) 
         seed,
         streams: PATH_STREAMS,
         stage_map: false,
+        shard: render::shard::Shard::WHOLE,
     };
     let kernel = |p: f64| {
         let small = SmallStep::new(SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap());
@@ -105,6 +106,7 @@ fn replicate(seed: u64, chain_min_depth: u32, pass: Option<(SamplerKind, u32)>) 
             sampler,
             budget,
             seed,
+            render::shard::Shard::WHOLE,
             &NoProgress,
             &cancel,
         );

@@ -72,6 +72,7 @@ fn settings(scene: &Scene, seed: u64, mpp: f64, large_step: LargeStepMode) -> Ml
         seed,
         streams: PATH_STREAMS,
         stage_map: false,
+        shard: render::shard::Shard::WHOLE,
     }
 }
 

@@ -97,6 +97,7 @@ fn pt_settings(scene: &Scene, spp: u32, max_depth: u32, seed: u64) -> PtDriverSe
         seed,
         sampler: render::sampler::SamplerKind::Independent,
         roulette: Some(render::integrator::pt::ROULETTE_DEPTH),
+        shard: render::shard::Shard::WHOLE,
     }
 }
 

@@ -138,6 +138,7 @@ fn settings(scene: &Scene, seed: u64, mutations_per_pixel: f64) -> MltSettings {
         seed,
         streams: PATH_STREAMS,
         stage_map: false,
+        shard: render::shard::Shard::WHOLE,
     }
 }
 

@@ -77,6 +77,7 @@ fn settings(seed: u64, large_step: LargeStepMode) -> MltSettings {
         seed,
         streams: 1,
         stage_map: false,
+        shard: render::shard::Shard::WHOLE,
     }
 }
 

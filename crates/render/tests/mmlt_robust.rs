@@ -101,6 +101,7 @@ fn mmlt_normalized(
         seed,
         streams: PATH_STREAMS,
         stage_map: false,
+        shard: render::shard::Shard::WHOLE,
     };
     let targets = MmltTarget::all_depths(scene, params(), w, h);
     let cancel = AtomicBool::new(false);
@@ -274,6 +275,7 @@ fn strategy_strata_match_the_analytic_enclosure() {
                 seed: 35_000 + r,
                 streams: PATH_STREAMS,
                 stage_map: false,
+                shard: render::shard::Shard::WHOLE,
             };
             let out = MltDriver::new(
                 &MmltTarget::all_depths(&scene, enclosure_params, 16, 16),

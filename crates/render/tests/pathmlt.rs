@@ -313,7 +313,11 @@ fn unsupported_features_are_errors() {
     let s = pathmlt_settings();
     let dof = load("dof.gltf");
     let e = pathmlt_error(&dof, &s);
-    assert!(e.contains("pinhole"), "{e}");
+    // It says what to change in the scene (there is no --aperture flag).
+    assert!(
+        e.contains("pinhole") && e.contains("aperture_radius") && !e.contains("--aperture"),
+        "{e}"
+    );
     let mut punctual = Scene::cornell_box(8, 8);
     punctual.add_punctual_lights([PunctualLight::point(
         Vec3A::new(0.0, 0.5, 0.0),

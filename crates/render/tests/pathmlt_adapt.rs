@@ -99,6 +99,7 @@ fn replicates(
                 seed: seed0 + r,
                 streams: 1,
                 stage_map: false,
+                shard: render::shard::Shard::WHOLE,
             };
             let out = pathmlt::render_adaptive(
                 scene,

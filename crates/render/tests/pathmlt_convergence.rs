@@ -65,6 +65,7 @@ fn settings(scene: &Scene, seed: u64, mutations_per_pixel: f64) -> MltSettings {
         seed,
         streams: 1,
         stage_map: false,
+        shard: render::shard::Shard::WHOLE,
     }
 }
 

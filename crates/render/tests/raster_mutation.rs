@@ -64,6 +64,7 @@ fn mlt_settings(seed: u64, mutations_per_pixel: f64) -> MltSettings {
         seed,
         streams: PATH_STREAMS,
         stage_map: false,
+        shard: render::shard::Shard::WHOLE,
     }
 }
 

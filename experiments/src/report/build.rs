@@ -97,7 +97,7 @@ pub fn write_report(
             source,
         })?;
     }
-    std::fs::write(output, html).map_err(|source| ReportError::Io {
+    render::files::write_bytes_atomic(output, html).map_err(|source| ReportError::Io {
         path: output.to_path_buf(),
         source,
     })?;

@@ -18,7 +18,7 @@ pub const MANIFEST_FILE: &str = "run.json";
 pub struct RunManifest {
     /// Heading of the report, e.g. `zsolnai_large_step: cornell-glass`.
     pub title: String,
-    /// Commit the run was made from (`git describe --always --dirty`), or `unknown`.
+    /// The commit of the chainlight build that made the run ([`BUILD_COMMIT`]), or `unknown`.
     pub commit: String,
     /// Parameters shared by every method (size, budget, depth, ...), shown as a table.
     #[serde(default)]
@@ -75,21 +75,28 @@ impl RunManifest {
     /// Reads `dir/run.json`.
     ///
     /// # Errors
-    /// [`ReportError::Io`] if the file cannot be read, [`ReportError::Manifest`] if it is not a
-    /// valid manifest.
+    /// [`ReportError::Io`] if the file cannot be read or is not a regular file,
+    /// [`ReportError::Manifest`] if it is not a valid manifest.
     pub fn load(dir: impl AsRef<Path>) -> Result<Self, ReportError> {
         let path = dir.as_ref().join(MANIFEST_FILE);
-        let text = std::fs::read_to_string(&path).map_err(|source| ReportError::Io {
+        let io = |source| ReportError::Io {
             path: path.clone(),
             source,
-        })?;
+        };
+        // Only a regular file: a FIFO named run.json would block, a device never end.
+        let mut text = String::new();
+        std::io::Read::read_to_string(
+            &mut render::files::open_regular(&path).map_err(io)?,
+            &mut text,
+        )
+        .map_err(io)?;
         serde_json::from_str(&text).map_err(|e| ReportError::Manifest {
             path,
             message: e.to_string(),
         })
     }
 
-    /// Writes `dir/run.json` (pretty-printed), creating `dir` if needed.
+    /// Writes `dir/run.json` (pretty-printed, atomically), creating `dir` if needed.
     ///
     /// # Errors
     /// [`ReportError::Io`] if the directory or file cannot be written.
@@ -104,7 +111,8 @@ impl RunManifest {
             path: path.clone(),
             message: e.to_string(),
         })?;
-        std::fs::write(&path, text).map_err(|source| ReportError::Io { path, source })
+        render::files::write_bytes_atomic(&path, text)
+            .map_err(|source| ReportError::Io { path, source })
     }
 
     /// Checks what the report relies on: at least one method, unique non-empty names, at least
@@ -143,6 +151,25 @@ impl RunManifest {
     }
 }
 
+impl RunManifest {
+    /// Every image a report of this run reads, with what it is (`the reference`, `the image of
+    /// METHOD, seed S`): paths relative to `run_dir` resolved in it.
+    #[must_use]
+    pub fn image_files(&self, run_dir: impl AsRef<Path>) -> Vec<(String, PathBuf)> {
+        let dir = run_dir.as_ref();
+        let mut files = vec![("the reference".to_string(), resolve(dir, &self.reference))];
+        for method in &self.methods {
+            for image in &method.images {
+                files.push((
+                    format!("the image of {}, seed {}", method.name, image.seed),
+                    resolve(dir, &image.path),
+                ));
+            }
+        }
+        files
+    }
+}
+
 /// `path` relative to `dir` unless it is absolute.
 pub(crate) fn resolve(dir: &Path, path: &Path) -> PathBuf {
     if path.is_absolute() {
@@ -152,18 +179,8 @@ pub(crate) fn resolve(dir: &Path, path: &Path) -> PathBuf {
     }
 }
 
-/// The commit of the working tree at `dir` (`git describe --always --dirty`), or `unknown`
-/// when git or the repository is not available.
-#[must_use]
-pub fn current_commit(dir: impl AsRef<Path>) -> String {
-    std::process::Command::new("git")
-        .args(["describe", "--always", "--dirty", "--abbrev=12"])
-        .current_dir(dir)
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .and_then(|o| String::from_utf8(o.stdout).ok())
-        .map(|s| s.trim().to_string())
-        .filter(|s| !s.is_empty())
-        .unwrap_or_else(|| "unknown".into())
-}
+/// The commit chainlight was built from (the first 12 hex digits, or `unknown` when it was not
+/// built from a git checkout), recorded at build time by reading the repository's files: the
+/// commit of the code that makes a run, not of the folder it runs in. Finding it runs no
+/// program (running `git` in a folder runs that repository's configured commands).
+pub const BUILD_COMMIT: &str = env!("CHAINLIGHT_BUILD_COMMIT");

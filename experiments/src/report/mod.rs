@@ -27,7 +27,7 @@ use std::path::PathBuf;
 pub use build::write_report;
 pub use check::find_external_urls;
 pub use manifest::{
-    current_commit, ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest, SeedImage,
+    ConvergencePoint, ConvergenceSeries, MethodRun, RunManifest, SeedImage, BUILD_COMMIT,
     MANIFEST_FILE,
 };
 

@@ -28,10 +28,17 @@ pub trait SharedController<K: ?Sized> {
     fn end_round(pooled: &mut Self::Shared) {
         let _ = pooled;
     }
+    /// True if the pooled statistics make a chain's moves depend on other chains (the
+    /// default): a render split into shards ([`crate::render_loop::Shard`]) must then run
+    /// every chain in every shard and keep only its own chains' splats. False for
+    /// controllers whose chains are independent (nothing is pooled), so a shard runs only
+    /// its own chains.
+    const COUPLES_CHAINS: bool = true;
 }
 
 impl<K: ?Sized> SharedController<K> for NoAdaptation {
     type Shared = ();
+    const COUPLES_CHAINS: bool = false;
     fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}
     fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
 }
@@ -39,6 +46,7 @@ impl<K: ?Sized> SharedController<K> for NoAdaptation {
 /// Global scale adaptation is per chain (each chain follows its own sign rule).
 impl<K: ?Sized> SharedController<K> for GlobalScale {
     type Shared = ();
+    const COUPLES_CHAINS: bool = false;
     fn contribute(&mut self, _kernel: &mut K, _pooled: &mut ()) {}
     fn receive(&mut self, _kernel: &mut K, _pooled: &()) {}
 }
@@ -92,4 +100,5 @@ impl<K: ?Sized, A: SharedController<K>, B: SharedController<K>> SharedController
         A::end_round(&mut pooled.0);
         B::end_round(&mut pooled.1);
     }
+    const COUPLES_CHAINS: bool = A::COUPLES_CHAINS || B::COUPLES_CHAINS;
 }

@@ -18,14 +18,20 @@ use crate::ChainRng;
 /// Mutations between two checks of the cancel flag and the deadline.
 const POLL_EVERY: u64 = 64;
 
+/// A chain of a job with its remaining mutations.
+pub(crate) type JobChain<'t, T, K, C> = (Chain<'t, T, K, C, ChainRng>, u64);
+
 /// One work unit: its chains (each with its remaining mutations) and its own sink.
 pub(crate) struct Job<'t, T: Target, K, C, Sk> {
-    pub(crate) chains: Vec<(Chain<'t, T, K, C, ChainRng>, u64)>,
+    pub(crate) chains: Vec<JobChain<'t, T, K, C>>,
     /// Per chain: the extra factor of its splats ([`super::ChainAllocation`]).
     pub(crate) weights: Vec<f64>,
     pub(crate) sink: Sk,
     pub(crate) dropped: u64,
     pub(crate) non_finite: u64,
+    /// Another shard's job run only for the pooled statistics of coupled controllers
+    /// ([`super::Shard`]): its chains step without splatting.
+    pub(crate) muted: bool,
 }
 
 impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
@@ -36,6 +42,34 @@ impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
             sink,
             dropped: 0,
             non_finite: 0,
+            muted: false,
+        }
+    }
+}
+
+/// One round of a muted job's chains: the same steps as an unmuted job, no splats, no
+/// progress (the shard that owns them reports these mutations).
+fn step_muted<T, K, C>(
+    chains: &mut [JobChain<'_, T, K, C>],
+    round: u64,
+    stop: &(impl Fn() -> bool + Sync),
+) where
+    T: Target,
+    K: Kernel<T>,
+    C: Controller<K, T::State>,
+{
+    'chains: for (chain, remaining) in chains.iter_mut() {
+        let mut left = round.min(*remaining);
+        while left > 0 {
+            if stop() {
+                break 'chains;
+            }
+            let n = left.min(POLL_EVERY);
+            for _ in 0..n {
+                let _ = chain.step(&mut ());
+            }
+            left -= n;
+            *remaining -= n;
         }
     }
 }
@@ -74,6 +108,7 @@ where
     let mut first_round = None;
     let cancelled = || cancel.load(Ordering::Relaxed);
     let late = || deadline.is_some_and(|t| Instant::now() >= t);
+    let stop = || cancelled() || late();
     let started = Instant::now();
     loop {
         let first = first_round.is_none();
@@ -90,7 +125,12 @@ where
                 sink,
                 dropped,
                 non_finite,
+                muted,
             } = job;
+            if *muted {
+                step_muted(chains, round, &stop);
+                return;
+            }
             let mut observer = SplatObserver::new(sink);
             'chains: for (i, ((chain, remaining), &weight)) in
                 chains.iter_mut().zip(weights.iter()).enumerate()

@@ -16,7 +16,8 @@
 //!    may be stratified ([`IndependentStates::strata`]).
 //! 3. **Chains in fixed jobs**, each job with its own sink, merged in job order; per-chain RNGs
 //!    seeded from (seed, chain index): under a mutation budget the image is bit-identical for
-//!    any thread count.
+//!    any thread count. A sink may also be a handle to one shared [`ExactSplatGrid`], whose
+//!    sums do not depend on the order of the splats: one image of memory for every job.
 //! 4. **Rounds**: every chain runs `round_mutations` steps, then the controllers' shared
 //!    statistics are pooled in job order and handed back ([`SharedController`]). Time budget,
 //!    cancellation and progress are checked inside rounds, so a cancel takes effect within a
@@ -28,6 +29,7 @@
 //! primary sample space mapped onto a `W x H` image: `W * H`).
 
 mod bootstrap;
+mod exact_grid;
 mod jobs;
 mod large_step_mis;
 mod notes;
@@ -39,6 +41,7 @@ mod splat;
 pub use crate::controller::{Both, SharedController};
 use bootstrap::TimeCap;
 pub use bootstrap::{bootstrap_key, ChainAllocation, IndependentStates};
+pub use exact_grid::{ExactSplatGrid, DEFAULT_FRACTION_BITS, EXACT_GRID_BYTES_PER_PIXEL};
 #[cfg(feature = "testing")]
 pub(crate) use large_step_mis::mis_step;
 pub use large_step_mis::LargeStepMis;
@@ -104,6 +107,48 @@ pub struct LoopSettings {
     /// pbrt's scheme; [`ChainAllocation::PerTarget`]: a fixed count per target, each target's
     /// splats scaled by `b_d / n_d`).
     pub chain_allocation: ChainAllocation,
+    /// Which part of the fixed job list this run renders (default [`Shard::WHOLE`]): see
+    /// [`Shard`].
+    pub shard: Shard,
+}
+
+/// A part of a render split over processes: shard `index` of `count` owns the contiguous
+/// run of jobs `j` with `j * count / jobs == index`. Every shard draws the same bootstrap and
+/// chain starts (they depend only on the seed); a shard runs only its own jobs' chains, or,
+/// when the controllers couple the chains ([`SharedController::COUPLES_CHAINS`]), every chain
+/// with only its own jobs' splats kept, so the pooled statistics are those of the whole
+/// render. Its sink then holds exactly its jobs' splats and [`LoopOutput::mutations`] counts
+/// exactly its jobs' mutations: with an order-independent sink ([`ExactSplatGrid`]) the sums
+/// of all shards' sinks and mutation counts are bit for bit those of the whole render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This part, `0..count`.
+    pub index: u32,
+    /// Number of parts, at least 1.
+    pub count: u32,
+}
+
+impl Shard {
+    /// The whole render (shard 0 of 1).
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+
+    /// True if work unit `unit` of `units` belongs to this shard.
+    #[must_use]
+    pub fn owns(&self, unit: usize, units: usize) -> bool {
+        units == 0 || (unit as u64 * u64::from(self.count) / units as u64) == u64::from(self.index)
+    }
+
+    /// True for [`Shard::WHOLE`] (or any one-part split).
+    #[must_use]
+    pub fn is_whole(&self) -> bool {
+        self.count == 1
+    }
+}
+
+impl Default for Shard {
+    fn default() -> Self {
+        Self::WHOLE
+    }
 }
 
 impl Default for LoopSettings {
@@ -118,6 +163,7 @@ impl Default for LoopSettings {
             bootstrap_time_share: 0.25,
             large_step_mis: false,
             chain_allocation: ChainAllocation::Joint,
+            shard: Shard::WHOLE,
         }
     }
 }
@@ -175,6 +221,13 @@ impl LoopSettings {
             ">= 1",
         )?;
         range("jobs", self.jobs as f64, 1.0, 4096.0, "1..=4096")?;
+        if self.shard.count == 0 || self.shard.index >= self.shard.count {
+            return Err(McmcError::InvalidParameter {
+                name: "shard",
+                value: f64::from(self.shard.index),
+                allowed: "index in 0..count, count >= 1",
+            });
+        }
         if !(self.bootstrap_time_share > 0.0 && self.bootstrap_time_share <= 1.0) {
             return Err(McmcError::InvalidParameter {
                 name: "bootstrap_time_share",
@@ -576,11 +629,16 @@ where
         ));
         let n_jobs = settings.jobs.min(chains);
         let mut skipped = 0usize;
+        let shard = settings.shard;
         let mut setup_stopped = None;
         let mut job_list: Vec<jobs::Job<'_, T, K, C, Sk>> = Vec::with_capacity(n_jobs);
         'jobs: for j in 0..n_jobs {
+            if !(shard.owns(j, n_jobs) || C::COUPLES_CHAINS) {
+                continue;
+            }
             let (lo, hi) = (j * chains / n_jobs, (j + 1) * chains / n_jobs);
             let mut job = jobs::Job::new((self.sink)());
+            job.muted = !shard.owns(j, n_jobs);
             for c in lo..hi {
                 if c % SETUP_POLL == 0 && c > 0 {
                     if cancel.load(Ordering::Relaxed) {
@@ -641,7 +699,7 @@ where
         out.shared = summary.shared;
         out.chains_time = chains_start.elapsed();
         out.first_round_time = summary.first_round;
-        for job in &job_list {
+        for job in job_list.iter().filter(|j| !j.muted) {
             out.sink.merge(&job.sink);
             out.dropped_splats += job.dropped;
             out.non_finite += job.non_finite;

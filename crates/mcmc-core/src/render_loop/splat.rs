@@ -33,8 +33,10 @@ impl SplatPayload for Option<Splat> {
     }
 }
 
-/// Where a render loop's splats accumulate: the caller's film. The loop gives every job its
-/// own sink and merges them in job order, so no sink needs locks or atomics.
+/// Where a render loop's splats accumulate: the caller's film. The loop asks the sink factory
+/// for one sink per job and merges them in job order, so a sink that owns its buffer (a
+/// [`SplatGrid`]) needs no locks or atomics; a handle to one shared, order-independent grid
+/// ([`super::ExactSplatGrid`]) keeps one image of memory for any number of jobs.
 pub trait SplatSink: Send {
     /// Adds `weight * splat.rgb` where `splat.raster` lands; returns false if the splat was
     /// dropped (outside the image, or non-finite).

@@ -19,9 +19,10 @@
 //!    Sidak correction for the number of tests in a file.
 //! 4. **Splat weights** ([`splat_weight_test`], [`toy_splat_weight_test`]): N exact starts,
 //!    ONE step each, the splat-weighted histogram of what the step reported to its
-//!    [`Observer`](crate::Observer) compared with `N pi(bin)` by Hotelling's statistic with
-//!    the covariance taken from the data (weights need not sum to 1): the observer contract
-//!    "the expected splat of one step from x equals `E[h(X') | X = x]`".
+//!    [`Observer`](crate::Observer) compared with `N pi(bin)` by a chi-square statistic whose
+//!    covariance takes its shape from the weights and its scale from `pi` (weights need not
+//!    sum to 1; [`SplatMoments::test`]): the observer contract "the expected splat of one
+//!    step from x equals `E[h(X') | X = x]`".
 //!
 //! Two-sample tests ([`chi_square_two_sample`], [`ks_two_sample`]) compare two samplers when the reference law is known only through a second sampler.
 //!
@@ -57,6 +58,8 @@ pub mod chi_square;
 mod finite_state;
 mod fixtures;
 mod pairwise;
+mod splat_moments;
+mod splat_statistic;
 mod splat_weights;
 mod stationarity;
 mod two_sample;
@@ -75,12 +78,16 @@ pub use pairwise::{
     assert_hastings_consistent, assert_pairwise_balance, assert_path_balance,
     assert_symmetric_proposal, log_values_agree, path_flows, PairwiseParams, PairwiseReport,
 };
+pub use splat_moments::SplatMoments;
+pub use splat_statistic::{SplatWeightReport, DETERMINISTIC_TOLERANCE};
 pub use splat_weights::{
-    splat_weight_test, toy_splat_weight_test, SplatParams, SplatWeightReport,
-    DETERMINISTIC_TOLERANCE, SPLAT_MIN_EXPECTED,
+    splat_moments, splat_weight_test, toy_splat_moments, toy_splat_weight_test, SplatParams,
+    SPLAT_MIN_EXPECTED,
 };
 pub use stationarity::{
     chi_square_of_states, stationarity_test, toy_stationarity_test, ExactBins, FnBins,
     StationarityParams,
 };
-pub use two_sample::{chi_square_two_sample, kolmogorov_survival, ks_two_sample, KsReport};
+pub use two_sample::{
+    chi_square_two_sample, kolmogorov_survival, ks_one_sample, ks_two_sample, KsReport,
+};

@@ -16,40 +16,25 @@
 //! or splat "correctly" for a wrong move (weight 1 on a force-accepted candidate).
 //!
 //! # The statistic
-//! Start `i` (of `N` independent exact starts, one step each) contributes a vector
-//! `c_i = (c_i1, ..., c_iB)` over the `B` pooled bins. The `c_i` are i.i.d. with mean `mu`
-//! and some covariance `Sigma` that depends on the kernel: MH's weights `(1 - a, a)` sum to 1
-//! at every step, but delayed rejection's unbiased scheme sums to 1 only in expectation and
-//! may leave `[0, 1]`, so no multinomial formula applies. The variance is therefore taken
-//! from the data: with the sample mean `m` and sample covariance
-//! `S = sum_i (c_i - m)(c_i - m)^T / (N - 1)`, the multivariate central limit theorem gives
-//! `sqrt(N) (m - mu) -> Normal(0, Sigma)`, and since `S -> Sigma`, Hotelling's statistic
-//!
-//! ```text
-//! T^2 = N (m - p)^T S^+ (m - p)  ->  chi^2 with rank(S) degrees of freedom
-//! ```
-//!
-//! under the hypothesis `mu = p`. (Hotelling's exact law under normality is
-//! `T^2 (N - r) / ((N - 1) r) ~ F(r, N - r)`; with `N >= 10^4` and `r <= 100` the chi-square
-//! p-value differs from it by under 1% of itself.) `S^+` is the pseudo-inverse over the
-//! eigen-directions of `S` with eigenvalue above `1e-10` times the largest. A direction with
-//! (numerically) zero sample variance is one in which every start contributed exactly the
-//! same amount, e.g. the total weight when weights always sum to 1; there the deviation
-//! `v^T (m - p)` is deterministic, and it must vanish to within [`DETERMINISTIC_TOLERANCE`]
-//! (rounding and the accuracy of the bin probabilities), else the statistic is infinite.
+//! Start `i` (of `N` independent exact starts, one step each) contributes a vector `c_i` of
+//! the weight it splatted into each pooled bin ([`splat_moments`] gathers their first, second
+//! and third moments). The weights need not sum to 1 (delayed rejection's unbiased scheme sums
+//! to 1 only in expectation), so no multinomial formula applies; [`SplatMoments::test`]
+//! compares the mean with `p` by a chi-square statistic whose covariance has the shape of
+//! the observed weights and the scale of the hypothesis (its docs derive it, and say why the
+//! plain sample covariance is anti-conservative at these sizes).
 //!
 //! Bins are pooled until `N p_b >= min_expected` ([`SPLAT_MIN_EXPECTED`] = 20 by default:
 //! each bin's mean weight is then an average over at least ~20 non-zero contributions, so
-//! the normal approximation and the covariance estimate are reasonable). Weight splatted into
-//! a bin of probability 0 makes the test fail outright.
+//! the normal approximation is reasonable). Weight splatted into a bin of probability 0
+//! makes the test fail outright.
 
-use std::fmt;
-
-use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
-use super::chi_square::{pool, sidak_alpha, survival, ALPHA};
+use super::chi_square::pool;
+use super::splat_moments::SplatMoments;
+use super::splat_statistic::SplatWeightReport;
 use super::stationarity::ExactBins;
 use crate::controller::NoAdaptation;
 use crate::kernel::{Kernel, Observer};
@@ -60,16 +45,6 @@ use crate::Chain;
 
 /// Default minimum expected splat weight `N p_b` per pooled bin.
 pub const SPLAT_MIN_EXPECTED: f64 = 20.0;
-
-/// Largest deviation of the mean splat from `p` tolerated along a direction in which every
-/// start contributed exactly the same (see the module docs): far above rounding (`1e-15`
-/// per operation) and the accuracy of exact bin probabilities (`1e-12`), far below any real
-/// bias.
-pub const DETERMINISTIC_TOLERANCE: f64 = 1e-9;
-
-/// Relative eigenvalue below which a direction of the sample covariance counts as having
-/// zero variance.
-const RELATIVE_EIGEN_FLOOR: f64 = 1e-10;
 
 /// Size and seed of a splat-weight test.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -93,69 +68,6 @@ impl SplatParams {
             seed,
             min_expected: SPLAT_MIN_EXPECTED,
         }
-    }
-}
-
-/// The outcome of a splat-weight test.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SplatWeightReport {
-    /// Hotelling's `T^2` (`+inf` for weight in impossible bins or a deterministic bias).
-    pub statistic: f64,
-    /// Degrees of freedom: the rank of the sample covariance of the per-start vectors.
-    pub degrees_of_freedom: usize,
-    /// `P(chi^2_dof >= statistic)`: uniform on `[0, 1]` under the hypothesis (asymptotically).
-    pub p_value: f64,
-    /// Number of starts `N`.
-    pub starts: usize,
-    /// Mean over starts of the total weight one step splatted (1 for MH).
-    pub mean_total_weight: f64,
-    /// Total absolute weight splatted into bins of probability 0.
-    pub impossible_weight: f64,
-    /// The pooled bin whose mean weight deviates most (in standard errors) from its
-    /// probability: (original bins, total weight splatted there, expected `N p`, z-score).
-    pub worst_bin: Option<(Vec<usize>, f64, f64, f64)>,
-}
-
-impl fmt::Display for SplatWeightReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "T^2 = {:.3} with {} dof, p = {:.3e} ({} starts, mean total weight {:.5}, {:.3} \
-             weight in zero-probability bins",
-            self.statistic,
-            self.degrees_of_freedom,
-            self.p_value,
-            self.starts,
-            self.mean_total_weight,
-            self.impossible_weight
-        )?;
-        if let Some((bins, w, e, z)) = &self.worst_bin {
-            write!(
-                f,
-                "; worst bin(s) {bins:?}: weight {w:.1}, expected {e:.1}, z = {z:.2}"
-            )?;
-        }
-        write!(f, ")")
-    }
-}
-
-impl SplatWeightReport {
-    /// True if the test rejects at level `alpha` (also when it has no degree of freedom).
-    #[must_use]
-    pub fn rejects(&self, alpha: f64) -> bool {
-        self.degrees_of_freedom == 0 || self.p_value.is_nan() || self.p_value < alpha
-    }
-
-    /// Panics unless the test passes at the Sidak-corrected level for `tests_in_file` tests
-    /// sharing the overall level [`ALPHA`].
-    #[track_caller]
-    pub fn assert_passes(&self, what: &str, tests_in_file: usize) {
-        let level = sidak_alpha(ALPHA, tests_in_file);
-        assert!(
-            !self.rejects(level),
-            "{what}: splat-weight test rejects at level {level:.2e} (alpha = {ALPHA}, Sidak \
-             over {tests_in_file} tests): {self}"
-        );
     }
 }
 
@@ -185,19 +97,18 @@ impl<S, P, B: ExactBins<S> + ?Sized> Observer<S, P> for Recorder<'_, B> {
 }
 
 /// Runs one step of `kernel` (a fresh clone, no adaptation) from each of `params.starts`
-/// independent exact draws `sample_exact(rng)`, accumulates the splat-weighted histogram over
-/// `bins`, and tests its mean against the bin probabilities with Hotelling's statistic (see
-/// the module docs for the derivation).
+/// independent exact draws `sample_exact(rng)` and gathers the moments of the per-start
+/// splat vectors over `bins`, pooled to expected weight `>= params.min_expected`.
 ///
 /// # Panics
 /// If an exact draw has zero density, or a step reports an error (NaN density).
-pub fn splat_weight_test<T, K, B, F>(
+pub fn splat_moments<T, K, B, F>(
     target: &T,
     kernel: &K,
     mut sample_exact: F,
     bins: &B,
     params: &SplatParams,
-) -> SplatWeightReport
+) -> SplatMoments
 where
     T: Target,
     K: Kernel<T> + Clone,
@@ -218,10 +129,7 @@ where
         .iter()
         .map(|g| g.iter().map(|&b| probabilities[b]).sum())
         .collect();
-    let dim = groups.len();
-    let mut sum = DVector::<f64>::zeros(dim);
-    let mut cross = DMatrix::<f64>::zeros(dim, dim);
-    let (mut total, mut impossible) = (0.0, 0.0);
+    let mut moments = SplatMoments::new(groups, p);
     let mut recorder = Recorder {
         bins,
         pooled_of: &pooled_of,
@@ -240,73 +148,32 @@ where
         if let Err(e) = chain.step(&mut recorder) {
             panic!("step from start {i} failed: {e}");
         }
-        total += recorder.total;
-        impossible += recorder.impossible;
-        for &(j, cj) in &recorder.row {
-            sum[j] += cj;
-            for &(k, ck) in &recorder.row {
-                cross[(j, k)] += cj * ck;
-            }
-        }
+        moments.push(&recorder.row, recorder.total, recorder.impossible);
     }
-    let nf = n as f64;
-    let mean = &sum / nf;
-    let covariance = (cross - &mean * mean.transpose() * nf) / (nf - 1.0).max(1.0);
-    let deviation = &mean - DVector::from_vec(p.clone());
-    let (statistic, degrees_of_freedom) = hotelling(&covariance, &deviation, nf);
-    let statistic = if impossible > 0.0 {
-        f64::INFINITY
-    } else {
-        statistic
-    };
-    let p_value = if degrees_of_freedom == 0 {
-        1.0
-    } else {
-        survival(statistic, degrees_of_freedom as f64)
-    };
-    let worst_bin = (0..dim)
-        .map(|k| {
-            let se = (covariance[(k, k)] / nf).sqrt();
-            let z = if se > 0.0 {
-                deviation[k] / se
-            } else if deviation[k].abs() > DETERMINISTIC_TOLERANCE {
-                f64::INFINITY.copysign(deviation[k])
-            } else {
-                0.0
-            };
-            (k, z)
-        })
-        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-        .map(|(k, z)| (groups[k].clone(), sum[k], nf * p[k], z));
-    SplatWeightReport {
-        statistic,
-        degrees_of_freedom,
-        p_value,
-        starts: n,
-        mean_total_weight: total / nf,
-        impossible_weight: impossible,
-        worst_bin,
-    }
+    moments
 }
 
-/// `N d^T S^+ d` over the eigen-directions of `S` with non-negligible variance, and their
-/// number; `+inf` if `d` has a component above [`DETERMINISTIC_TOLERANCE`] along a direction
-/// without variance.
-fn hotelling(covariance: &DMatrix<f64>, deviation: &DVector<f64>, n: f64) -> (f64, usize) {
-    let eigen = SymmetricEigen::new(covariance.clone());
-    let largest = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
-    let mut statistic = 0.0;
-    let mut rank = 0;
-    for (k, &lambda) in eigen.eigenvalues.iter().enumerate() {
-        let z = eigen.eigenvectors.column(k).dot(deviation);
-        if largest > 0.0 && lambda > RELATIVE_EIGEN_FLOOR * largest {
-            statistic += n * z * z / lambda;
-            rank += 1;
-        } else if z.abs() > DETERMINISTIC_TOLERANCE {
-            statistic = f64::INFINITY;
-        }
-    }
-    (statistic, rank)
+/// Runs one step of `kernel` (a fresh clone, no adaptation) from each of `params.starts`
+/// independent exact draws `sample_exact(rng)`, accumulates the splat-weighted histogram over
+/// `bins`, and tests its mean against the bin probabilities ([`SplatMoments::test`], whose
+/// docs derive the statistic).
+///
+/// # Panics
+/// If an exact draw has zero density, or a step reports an error (NaN density).
+pub fn splat_weight_test<T, K, B, F>(
+    target: &T,
+    kernel: &K,
+    sample_exact: F,
+    bins: &B,
+    params: &SplatParams,
+) -> SplatWeightReport
+where
+    T: Target,
+    K: Kernel<T> + Clone,
+    B: ExactBins<T::State> + ?Sized,
+    F: FnMut(&mut Pcg64) -> T::State,
+{
+    splat_moments(target, kernel, sample_exact, bins, params).test()
 }
 
 /// [`splat_weight_test`] for a toy target, with its exact sampler and default bins.
@@ -319,33 +186,20 @@ where
     T: ToyTarget,
     K: Kernel<T> + Clone,
 {
-    splat_weight_test(
+    toy_splat_moments(target, kernel, params).test()
+}
+
+/// [`splat_moments`] for a toy target, with its exact sampler and default bins.
+pub fn toy_splat_moments<T, K>(target: &T, kernel: &K, params: &SplatParams) -> SplatMoments
+where
+    T: ToyTarget,
+    K: Kernel<T> + Clone,
+{
+    splat_moments(
         target,
         kernel,
         |rng| target.sample_exact(rng),
         &target.bins(),
         params,
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn hotelling_is_chi_square_in_whitened_coordinates() {
-        // Diagonal covariance: T^2 is the sum of squared z-scores.
-        let s = DMatrix::from_diagonal(&DVector::from_vec(vec![4.0, 1.0]));
-        let d = DVector::from_vec(vec![0.02, -0.01]);
-        let (t, r) = hotelling(&s, &d, 10_000.0);
-        assert_eq!(r, 2);
-        assert!((t - (1.0 + 1.0)).abs() < 1e-12, "{t}");
-        // A zero-variance direction is dropped when the mean agrees there, and fatal when not.
-        let s = DMatrix::from_diagonal(&DVector::from_vec(vec![4.0, 0.0]));
-        assert_eq!(hotelling(&s, &d, 10_000.0).0, f64::INFINITY);
-        let d = DVector::from_vec(vec![0.02, 0.0]);
-        let (t, r) = hotelling(&s, &d, 10_000.0);
-        assert_eq!(r, 1);
-        assert!((t - 1.0).abs() < 1e-12);
-    }
 }

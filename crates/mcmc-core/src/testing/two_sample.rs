@@ -2,7 +2,8 @@
 //!
 //! Used where the reference distribution is known only through a second sampler, e.g. lazy
 //! versus eager primary-sample-space mutation in the `pss` crate: both processes are run
-//! independently many times and their outcomes compared.
+//! independently many times and their outcomes compared. The one-sample Kolmogorov-Smirnov
+//! test against a known CDF ([`ks_one_sample`]) shares the Kolmogorov law.
 
 use std::fmt;
 
@@ -114,6 +115,31 @@ pub fn kolmogorov_survival(lambda: f64) -> f64 {
     sum.clamp(0.0, 1.0)
 }
 
+/// One-sample Kolmogorov-Smirnov test of `samples` (NaN-free) against a continuous `cdf`:
+/// `(D, p)` with `D = sup_x |F_n(x) - cdf(x)|` and the asymptotic p-value
+/// `Q_KS((sqrt(n) + 0.12 + 0.11 / sqrt(n)) D)` (Stephens' correction, as [`ks_two_sample`]).
+/// E.g. the p-values of independent tests against the uniform law (`cdf` the identity).
+///
+/// # Panics
+/// If `samples` is empty.
+#[must_use]
+pub fn ks_one_sample(samples: &[f64], cdf: impl Fn(f64) -> f64) -> (f64, f64) {
+    assert!(!samples.is_empty(), "the sample must be non-empty");
+    let mut sorted = samples.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let n = sorted.len() as f64;
+    let d = sorted
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| {
+            let f = cdf(x);
+            ((i + 1) as f64 / n - f).max(f - i as f64 / n)
+        })
+        .fold(0.0, f64::max);
+    let en = n.sqrt();
+    (d, kolmogorov_survival((en + 0.12 + 0.11 / en) * d))
+}
+
 /// Two-sample Kolmogorov-Smirnov test of two samples of reals (NaN-free).
 ///
 /// # Panics
@@ -177,6 +203,19 @@ mod tests {
         let leading = 2.0 * (-2.0 * lambda * lambda).exp();
         assert!((shifted.p_value / leading - 1.0).abs() < 1e-6, "{shifted}");
         assert!(shifted.p_value < 1e-15, "{shifted}");
+    }
+
+    #[test]
+    fn ks_one_sample_sees_a_uniform_grid_and_a_squeeze() {
+        // The midpoints (i + 1/2) / n of [0, 1): D = 1 / (2n), p = 1.
+        let grid: Vec<f64> = (0..1000).map(|i| (f64::from(i) + 0.5) / 1000.0).collect();
+        let (d, p) = ks_one_sample(&grid, |u| u);
+        assert!((d - 0.0005).abs() < 1e-12 && p == 1.0, "{d} {p}");
+        // Squeezed into [0, 0.9): D = 1 - 0.9 (1 - 1 / (2n)) at the last point, far in the
+        // tail.
+        let squeezed: Vec<f64> = grid.iter().map(|u| u * 0.9).collect();
+        let (d, p) = ks_one_sample(&squeezed, |u| u);
+        assert!((d - 0.10045).abs() < 1e-9 && p < 1e-6, "{d} {p}");
     }
 
     #[test]

@@ -14,7 +14,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use mcmc_core::testing::{kolmogorov_survival, sidak_alpha, ChiSquareReport, ALPHA};
+use mcmc_core::testing::{sidak_alpha, ChiSquareReport, ALPHA};
 use pss::{torus_displacement, wrap};
 
 /// Chi-square / KS tests of correct code in the orbital test files together (Sidak
@@ -34,20 +34,6 @@ pub(crate) fn level() -> f64 {
 pub(crate) const ANGLE_SAMPLES: usize = 200_000;
 /// Bins of an angle histogram on `[-pi, pi)`.
 pub(crate) const ANGLE_BINS: usize = 48;
-
-/// One-sample Kolmogorov-Smirnov test against a continuous CDF: `(D, p)` with Stephens'
-/// small-sample correction.
-pub(crate) fn ks_one_sample(samples: &mut [f64], cdf: impl Fn(f64) -> f64) -> (f64, f64) {
-    samples.sort_by(f64::total_cmp);
-    let n = samples.len() as f64;
-    let mut d = 0.0f64;
-    for (i, &x) in samples.iter().enumerate() {
-        let f = cdf(x);
-        d = d.max(f - i as f64 / n).max((i + 1) as f64 / n - f);
-    }
-    let lambda = (n.sqrt() + 0.12 + 0.11 / n.sqrt()) * d;
-    (d, kolmogorov_survival(lambda))
-}
 
 /// Probability of each of `bins` equal-width angle bins on `[-pi, pi)` under the density
 /// `pdf`, by the midpoint rule with 200 points per bin.

@@ -15,7 +15,7 @@ mod subpath;
 mod vertex;
 
 pub use connect::{connect, Connection, MisHeuristic};
-pub use render::{render_bdpt, render_bdpt_sampled, BdptOutput};
+pub use render::{render_bdpt, render_bdpt_sampled, render_bdpt_shard, strategy_list, BdptOutput};
 pub use scene_api::SceneRef;
 pub use subpath::{camera_subpath, light_subpath, random_walk, Roulette, SpecularDensities};
 pub use vertex::{geometry_term, Vertex, VertexKind, MAX_PATH_DEPTH, MAX_VERTICES};

@@ -6,14 +6,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::{UVec2, Vec2, Vec3};
-use mcmc_core::render_loop::SplatGrid;
+use mcmc_core::render_loop::{ExactSplatGrid, Shard};
 use mcmc_core::Progress;
 use rayon::prelude::*;
 
 use super::{sample, BdptParams, BdptScratch, SceneRef, StrategySplat, MAX_VERTICES};
-use crate::film::{pixel_sample_position, Film, FilmTile, Filter, PixelRect};
+use crate::film::{exact_splat_grid, pixel_sample_position, Film, FilmTile, Filter, PixelRect};
 use crate::image::Image;
 use crate::sampler::{IndependentSampler, PixelSampler, Sampler, SamplerKind, SobolSampler};
+use crate::shard::Component;
 
 /// Number of fixed row bands (work units): the image does not depend on the thread count.
 const BANDS: usize = 8;
@@ -36,6 +37,8 @@ pub struct BdptOutput {
     pub unsampled_pixels: u64,
     /// MIS-weighted image of each strategy `(s, t)` (only if requested); they sum to `image`.
     pub strategy_images: Vec<((u8, u8), Image)>,
+    /// A shard's accumulators ([`render_bdpt_shard`]; `None` for the whole image).
+    pub component: Option<Component>,
 }
 
 /// The strategies `(s, t)` that can contribute at a maximum depth, split by where their
@@ -79,17 +82,32 @@ impl Strategies {
     }
 }
 
+/// The strategies `(s, t)` whose images [`render_bdpt`] returns with `strategy_images` at
+/// maximum depth `max_depth` (camera-side strategies first, then light tracing): what a caller
+/// writing them can check up front.
+#[must_use]
+pub fn strategy_list(max_depth: u32) -> Vec<(u8, u8)> {
+    let strategies = Strategies::new(max_depth);
+    strategies
+        .camera
+        .into_iter()
+        .chain(strategies.light)
+        .collect()
+}
+
 /// What one band accumulates. Camera-side contributions of a sample are summed and added as
 /// one pixel sample (the pixel's mean over its own samples); light-tracing splats are summed
 /// over the whole image and scaled by pixels / samples at the end (pbrt-v3's splat scale).
-struct Band {
+struct Band<'g> {
     rows: std::ops::Range<usize>,
     camera: FilmTile,
-    light: SplatGrid,
+    /// The light-tracing splats of every band: one shared exact grid (sums independent of
+    /// the order of the splats, so of the thread count).
+    light: &'g ExactSplatGrid,
     /// Per camera-side strategy (only with strategy images).
     strategy_camera: Vec<FilmTile>,
-    /// Per light-tracing strategy (only with strategy images).
-    strategy_light: Vec<SplatGrid>,
+    /// Per light-tracing strategy (only with strategy images), shared like `light`.
+    strategy_light: &'g [ExactSplatGrid],
     /// The current sample's contribution of each camera-side strategy.
     strategy_sums: Vec<Vec3>,
     samples: u64,
@@ -106,13 +124,15 @@ struct Pass<'a> {
     sampler: SamplerKind,
     index: u32,
     /// Rows not started by then are skipped (time budgets; in the first pass every row but
-    /// the image's first).
+    /// `free_row`).
     deadline: Option<Instant>,
+    /// The first row of the shard's first band: the first pass always renders it.
+    free_row: Option<usize>,
     progress: &'a dyn Progress,
     cancel: &'a AtomicBool,
 }
 
-impl Band {
+impl Band<'_> {
     /// Takes sample `pass.index` of every pixel of the band in row-major order; returns false
     /// if `cancel` (checked before every pixel) or the deadline (before every row) stopped it.
     fn render(&mut self, pass: &Pass<'_>) -> bool {
@@ -126,7 +146,7 @@ impl Band {
     fn render_with<S: PixelSampler>(&mut self, pass: &Pass<'_>, mut sampler: S) -> bool {
         let w = self.light.width();
         for y in self.rows.clone() {
-            let first = pass.index == 0 && y == 0;
+            let first = pass.index == 0 && Some(y) == pass.free_row;
             if !first && pass.deadline.is_some_and(|d| Instant::now() >= d) {
                 return false;
             }
@@ -251,12 +271,51 @@ pub fn render_bdpt_sampled(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> BdptOutput {
+    render_bdpt_shard(
+        scene,
+        params,
+        sampler,
+        (spp, time),
+        seed,
+        strategy_images,
+        Shard::WHOLE,
+        progress,
+        cancel,
+    )
+}
+
+/// [`render_bdpt_sampled`] rendering only the row bands of shard `shard` (`budget` is
+/// `(spp, time)`); the output's [`BdptOutput::component`] holds the shard's accumulators when
+/// the shard is not the whole image ([`crate::shard`]).
+#[allow(clippy::too_many_arguments)]
+pub fn render_bdpt_shard(
+    scene: SceneRef<'_>,
+    params: &BdptParams,
+    sampler: SamplerKind,
+    budget: (Option<u32>, Option<Duration>),
+    seed: u64,
+    strategy_images: bool,
+    shard: Shard,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> BdptOutput {
+    let (spp, time) = budget;
     let start = Instant::now();
     let (w, h) = (
         scene.camera().width() as usize,
         scene.camera().height() as usize,
     );
     let strategies = Strategies::new(params.max_depth);
+    let bound = scene.lights().emission_bound();
+    let light_grid = exact_splat_grid(w, h, bound);
+    let n_light = if strategy_images {
+        strategies.light.len()
+    } else {
+        0
+    };
+    let strategy_light_grids: Vec<ExactSplatGrid> = (0..n_light)
+        .map(|_| exact_splat_grid(w, h, bound))
+        .collect();
     let mut bands: Vec<Band> = (0..BANDS)
         .map(|b| {
             let rows = (b * h / BANDS)..((b + 1) * h / BANDS);
@@ -267,17 +326,17 @@ pub fn render_bdpt_sampled(
                 y1: rows.end,
             };
             let tile = || FilmTile::new(w, h, Filter::BOX, rect);
-            let (n_camera, n_light) = if strategy_images {
-                (strategies.camera.len(), strategies.light.len())
+            let n_camera = if strategy_images {
+                strategies.camera.len()
             } else {
-                (0, 0)
+                0
             };
             Band {
                 rows,
                 camera: tile(),
-                light: SplatGrid::new(w, h),
+                light: &light_grid,
                 strategy_camera: (0..n_camera).map(|_| tile()).collect(),
-                strategy_light: vec![SplatGrid::new(w, h); n_light],
+                strategy_light: &strategy_light_grids,
                 strategy_sums: vec![Vec3::ZERO; n_camera],
                 samples: 0,
                 dropped: 0,
@@ -289,6 +348,8 @@ pub fn render_bdpt_sampled(
     if let Some(n) = spp {
         progress.set_total(u64::from(n) * (w * h) as u64);
     }
+    let owned = |i: usize| shard.owns(i, BANDS);
+    let free_row = (0..BANDS).find(|&i| owned(i)).map(|i| i * h / BANDS);
     let mut done = 0u32;
     let mut stopped = false;
     while done < total_spp && !stopped {
@@ -300,13 +361,18 @@ pub fn render_bdpt_sampled(
             sampler,
             index: done,
             deadline: time.map(|t| start + t),
+            free_row,
             progress,
             cancel,
         };
         if done > 0 && pass.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        let complete: Vec<bool> = bands.par_iter_mut().map(|b| b.render(&pass)).collect();
+        let complete: Vec<bool> = bands
+            .par_iter_mut()
+            .enumerate()
+            .map(|(i, b)| !shard.owns(i, BANDS) || b.render(&pass))
+            .collect();
         stopped = complete.contains(&false) || cancel.load(Ordering::Relaxed);
         if complete.iter().all(|&c| c) {
             done += 1;
@@ -315,9 +381,16 @@ pub fn render_bdpt_sampled(
     let cancelled = cancel.load(Ordering::Relaxed) && done < total_spp;
 
     let samples: u64 = bands.iter().map(|b| b.samples).sum();
-    // An incomplete first pass took at most one sample per pixel: the others have none.
+    // An incomplete first pass took at most one sample per pixel of the shard's bands: the
+    // others have none.
     let unsampled_pixels = if done == 0 {
-        ((w * h) as u64).saturating_sub(samples)
+        let shard_pixels: usize = bands
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| owned(i))
+            .map(|(_, b)| b.rows.len() * w)
+            .sum();
+        (shard_pixels as u64).saturating_sub(samples)
     } else {
         0
     };
@@ -326,16 +399,30 @@ pub fn render_bdpt_sampled(
     } else {
         (w * h) as f64 / samples as f64
     };
-    let layers = bands.iter().map(|b| (Some(&b.camera), Some(&b.light)));
-    let (image, overflowed) = merge_layers(w, h, light_scale, layers);
+    let tiles = bands.iter().map(|b| &b.camera);
+    let (image, overflowed) = merge_layers(w, h, light_scale, tiles, Some(&light_grid));
+    let component = (!shard.is_whole()).then(|| {
+        let mut film = Film::new(w, h, Filter::BOX);
+        for band in &bands {
+            film.merge_tile(&band.camera);
+        }
+        let (sum, weight) = film.sums();
+        Component::Film {
+            sum: sum.to_vec(),
+            weight: weight.to_vec(),
+            light: Some(light_grid.clone()),
+            light_samples: samples,
+        }
+    });
     let strategy_images = if strategy_images {
         let camera = strategies.camera.iter().enumerate().map(|(i, &st)| {
-            let layers = bands.iter().map(|b| (Some(&b.strategy_camera[i]), None));
-            (st, merge_layers(w, h, light_scale, layers).0)
+            let tiles = bands.iter().map(|b| &b.strategy_camera[i]);
+            (st, merge_layers(w, h, light_scale, tiles, None).0)
         });
         let light = strategies.light.iter().enumerate().map(|(i, &st)| {
-            let layers = bands.iter().map(|b| (None, Some(&b.strategy_light[i])));
-            (st, merge_layers(w, h, light_scale, layers).0)
+            let tiles = std::iter::empty();
+            let grid = Some(&strategy_light_grids[i]);
+            (st, merge_layers(w, h, light_scale, tiles, grid).0)
         });
         let mut all: Vec<((u8, u8), Image)> = camera
             .chain(light)
@@ -354,26 +441,26 @@ pub fn render_bdpt_sampled(
         cancelled,
         unsampled_pixels,
         strategy_images,
+        component,
     }
 }
 
-/// The image of the bands' layers, merged in band order: the mean of the camera tiles' pixel
-/// samples plus `light_scale` times the light grids' sums; with the number of pixels dropped
-/// because they overflow f32 ([`Film::image_checked`]).
+/// The image of the bands' camera tiles, merged in band order (the mean of the pixel
+/// samples), plus `light_scale` times the shared light grid's sums; with the number of pixels
+/// dropped because they overflow f32 ([`Film::image_checked`]).
 fn merge_layers<'a>(
     w: usize,
     h: usize,
     light_scale: f64,
-    bands: impl Iterator<Item = (Option<&'a FilmTile>, Option<&'a SplatGrid>)>,
+    tiles: impl Iterator<Item = &'a FilmTile>,
+    light: Option<&ExactSplatGrid>,
 ) -> (Image, u64) {
     let mut film = Film::new(w, h, Filter::BOX);
-    for (camera, splats) in bands {
-        if let Some(tile) = camera {
-            film.merge_tile(tile);
-        }
-        if let Some(grid) = splats {
-            film.merge_splats(grid);
-        }
+    for tile in tiles {
+        film.merge_tile(tile);
+    }
+    if let Some(grid) = light {
+        film.merge_exact_splats(grid);
     }
     film.image_checked(light_scale)
 }

@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::UVec2;
+use mcmc_core::render_loop::Shard;
 use mcmc_core::Progress;
 use rayon::prelude::*;
 
@@ -41,6 +42,9 @@ pub struct PtDriverSettings {
     /// ([`pt::li_with`]); `None` turns it off. The usual value is [`pt::ROULETTE_DEPTH`]. (LQMC
     /// builds its paths itself and ignores it.)
     pub roulette: Option<u32>,
+    /// The part of the fixed tile list to render ([`Shard::WHOLE`]: all of it): shard `k`
+    /// of `n` renders the tiles `i` with `i * n / tiles == k` ([`crate::shard`]).
+    pub shard: Shard,
 }
 
 /// The result of [`render_pt`].
@@ -57,6 +61,8 @@ pub struct PtOutput {
     /// Pixels without any sample (black): a cancel or the time budget stopped the first pass
     /// before their tile ([`PassesOutcome::unsampled_pixels`]).
     pub unsampled_pixels: u64,
+    /// The pixel-sample sums the image was made from (a shard's part of a render).
+    pub film: Film,
 }
 
 /// Renders `scene` with unidirectional path tracing at `settings.width x settings.height`,
@@ -160,6 +166,7 @@ where
         settings.width,
         settings.height,
         settings.budget,
+        settings.shard,
         progress,
         cancel,
         render_tile,
@@ -176,6 +183,7 @@ where
         dropped_nonfinite: film.nonfinite + overflowed,
         cancelled: outcome.cancelled,
         unsampled_pixels: outcome.unsampled_pixels,
+        film,
     }
 }
 
@@ -184,8 +192,8 @@ where
 pub struct PassesOutcome {
     /// True if `cancel` stopped the render.
     pub cancelled: bool,
-    /// Pixels of the tiles that never completed a pass: they have no sample (black). Nonzero
-    /// only if a cancel or the time budget stopped the first pass.
+    /// Pixels of this shard's tiles that never completed a pass: they have no sample
+    /// (black). Nonzero only if a cancel or the time budget stopped the first pass.
     pub unsampled_pixels: u64,
 }
 
@@ -196,17 +204,19 @@ pub struct PassesOutcome {
 /// pixels of `rect` (a [`TILE_SIZE`] tile; tiles run in parallel on the current rayon pool)
 /// and returns its result and whether it completed (false: it saw `cancel`).
 /// `end_pass(first, count, results)` receives every tile's result of a pass, in tile order
-/// (`None` for a tile not started because `cancel` was set or a [`Budget::Time`] deadline
-/// had passed), so merging in that order gives the same bits for any thread count. Passes
-/// are as in [`render_pt`]: doubling up to a sixteenth of a sample budget, or one sample per
-/// pixel until the time budget is spent. The deadline is checked before every tile, in the
-/// first pass too (whose first tile always runs), so a huge image stops on time with part
-/// of it unsampled ([`PassesOutcome::unsampled_pixels`]). Progress is in pixel samples; the
-/// tile reports its own progress.
+/// (`None` for another shard's tile, or a tile not started because `cancel` was set or a
+/// [`Budget::Time`] deadline had passed), so merging in that order gives the same bits for
+/// any thread count. Passes are as in [`render_pt`]: doubling up to a sixteenth of a sample
+/// budget, or one sample per pixel until the time budget is spent. The deadline is checked
+/// before every tile, in the first pass too (whose first tile always runs), so a huge image
+/// stops on time with part of it unsampled ([`PassesOutcome::unsampled_pixels`]). Progress
+/// is in pixel samples; the tile reports its own progress.
+#[allow(clippy::too_many_arguments)]
 pub fn render_passes<R, F, M>(
     width: u32,
     height: u32,
     budget: Budget,
+    shard: Shard,
     progress: &dyn Progress,
     cancel: &AtomicBool,
     render_tile: F,
@@ -219,15 +229,30 @@ where
 {
     let start = Instant::now();
     let (w, h) = (width as usize, height as usize);
-    let work = tiles(w, h, TILE_SIZE);
-    let pixels = (w * h) as u64;
+    let all = tiles(w, h, TILE_SIZE);
+    let units = all.len();
+    // Another shard's tiles: `None` results, as tiles a time budget skipped.
+    let mine: Vec<bool> = (0..units).map(|i| shard.owns(i, units)).collect();
+    let work: Vec<(PixelRect, bool)> = all.into_iter().zip(mine).collect();
+    let pixels = work
+        .iter()
+        .filter(|(_, mine)| *mine)
+        .map(|(rect, _)| rect.area() as u64)
+        .sum::<u64>();
+    // The first pass always renders this shard's first tile.
+    let first_tile = work.iter().position(|(_, mine)| *mine);
     let mut cancelled = false;
     // Per tile: has it completed a pass (so every pixel has a sample)?
     let mut sampled = vec![false; work.len()];
-    let mut record = |done: &[Option<(R, bool)>]| {
-        for (s, d) in sampled.iter_mut().zip(done) {
-            *s |= matches!(d, Some((_, true)));
+    // Records the tiles a pass completed; true if one of this shard's tiles did not complete.
+    let mut record = |done: &[Option<(R, bool)>]| -> bool {
+        let mut incomplete = false;
+        for ((s, d), (_, mine)) in sampled.iter_mut().zip(done).zip(&work) {
+            let complete = matches!(d, Some((_, true)));
+            *s |= complete;
+            incomplete |= *mine && !complete;
         }
+        incomplete
     };
     match budget {
         Budget::SamplesPerPixel(spp) => {
@@ -235,12 +260,12 @@ where
             for (first, count) in passes(spp) {
                 let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
-                    .map(|&rect| {
-                        (!cancel.load(Ordering::Relaxed)).then(|| render_tile(rect, first, count))
+                    .map(|&(rect, mine)| {
+                        (mine && !cancel.load(Ordering::Relaxed))
+                            .then(|| render_tile(rect, first, count))
                     })
                     .collect();
-                cancelled |= done.iter().any(|d| !matches!(d, Some((_, true))));
-                record(&done);
+                cancelled |= record(&done);
                 end_pass(first, count, done);
                 if cancelled {
                     break;
@@ -254,14 +279,15 @@ where
                 let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
                     .enumerate()
-                    .map(|(i, &rect)| {
-                        let late = (pass > 0 || i > 0) && Instant::now() >= deadline;
-                        (!late && !cancel.load(Ordering::Relaxed))
+                    .map(|(i, &(rect, mine))| {
+                        let free = pass == 0 && Some(i) == first_tile;
+                        let late = !free && Instant::now() >= deadline;
+                        (mine && !late && !cancel.load(Ordering::Relaxed))
                             .then(|| render_tile(rect, pass, 1))
                     })
                     .collect();
-                cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
                 record(&done);
+                cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
                 end_pass(pass, 1, done);
                 pass += 1;
                 cancelled |= cancel.load(Ordering::Relaxed);
@@ -280,8 +306,8 @@ where
     let unsampled_pixels = work
         .iter()
         .zip(&sampled)
-        .filter(|(_, &s)| !s)
-        .map(|(rect, _)| rect.area() as u64)
+        .filter(|((_, mine), &s)| *mine && !s)
+        .map(|((rect, _), _)| rect.area() as u64)
         .sum();
     PassesOutcome {
         cancelled,
@@ -320,6 +346,7 @@ mod tests {
             seed: 1,
             sampler: SamplerKind::Independent,
             roulette: Some(pt::ROULETTE_DEPTH),
+            shard: Shard::WHOLE,
         }
     }
 

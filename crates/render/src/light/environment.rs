@@ -29,6 +29,26 @@ pub struct EnvironmentLight {
     distribution: Option<Distribution2D>,
     /// Mean radiance over the sphere (luminance), for light selection by power.
     mean_luminance: f32,
+    /// Texels of the map that were counted as 0.
+    dropped: DroppedTexels,
+}
+
+/// Texels of an environment map that [`EnvironmentLight::from_map`] counted as 0 (a texel with
+/// both kinds of bad channel counts as non-finite).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DroppedTexels {
+    /// Texels with a NaN or infinite channel.
+    pub non_finite: usize,
+    /// Texels with a negative (finite) channel.
+    pub negative: usize,
+}
+
+impl DroppedTexels {
+    /// True if no texel was dropped.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.non_finite == 0 && self.negative == 0
+    }
 }
 
 /// A direction sampled towards the environment.
@@ -53,16 +73,24 @@ impl EnvironmentLight {
             rotation: (0.0, 1.0),
             distribution: None,
             mean_luminance: luminance(radiance.to_array()),
+            dropped: DroppedTexels::default(),
         }
     }
 
     /// An equirectangular map times `strength`, rotated by `rotation_deg` about `+Y`.
-    /// Negative and non-finite texels count as 0.
+    /// Negative and non-finite channels count as 0; [`EnvironmentLight::dropped_texels`] says
+    /// how many texels had them.
     #[must_use]
     pub fn from_map(map: Image, strength: f32, rotation_deg: f32) -> Self {
         let (w, h) = (map.width.max(1), map.height.max(1));
         let mut map = map;
+        let mut dropped = DroppedTexels::default();
         for p in &mut map.pixels {
+            if p.iter().any(|c| !c.is_finite()) {
+                dropped.non_finite += 1;
+            } else if p.iter().any(|&c| c < 0.0) {
+                dropped.negative += 1;
+            }
             for c in p.iter_mut() {
                 if !(c.is_finite() && *c > 0.0) {
                     *c = 0.0;
@@ -98,7 +126,15 @@ impl EnvironmentLight {
             scale: Vec3::splat(strength),
             rotation: r.sin_cos(),
             mean_luminance: mean * strength,
+            dropped,
         }
+    }
+
+    /// The map's texels that were counted as 0 because a channel was NaN, infinite or negative
+    /// (none for a constant environment).
+    #[must_use]
+    pub fn dropped_texels(&self) -> DroppedTexels {
+        self.dropped
     }
 
     /// Reads an equirectangular map (`.exr`, `.hdr` or `.pfm`) and makes it an environment of
@@ -126,6 +162,26 @@ impl EnvironmentLight {
     #[must_use]
     pub fn mean_luminance(&self) -> f32 {
         self.mean_luminance
+    }
+
+    /// The largest radiance component over all directions (the map's brightest finite texel
+    /// times the multiplier, or the constant's largest channel).
+    #[must_use]
+    pub fn max_radiance(&self) -> f32 {
+        let scale = self.scale.max_element();
+        match &self.map {
+            None => scale,
+            Some(map) => {
+                let texel = map
+                    .pixels
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|c| c.is_finite())
+                    .fold(0.0f32, f32::max);
+                texel * scale
+            }
+        }
     }
 
     /// True for a constant environment.
@@ -254,6 +310,28 @@ mod tests {
             }
         }
         img
+    }
+
+    #[test]
+    fn dropped_texels_are_counted() {
+        let mut map = gradient_map();
+        map.set(0, 0, [f32::NAN, 1.0, 1.0]);
+        map.set(1, 0, [1.0, f32::INFINITY, -1.0]);
+        map.set(2, 0, [1.0, -0.5, 1.0]);
+        let env = EnvironmentLight::from_map(map, 1.0, 0.0);
+        assert_eq!(
+            env.dropped_texels(),
+            DroppedTexels {
+                non_finite: 2,
+                negative: 1
+            }
+        );
+        // Negative control: the unmodified map drops nothing.
+        let clean = EnvironmentLight::from_map(gradient_map(), 1.0, 0.0);
+        assert!(clean.dropped_texels().is_empty());
+        assert!(EnvironmentLight::constant(Vec3::ONE)
+            .dropped_texels()
+            .is_empty());
     }
 
     #[test]

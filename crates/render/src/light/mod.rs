@@ -26,7 +26,7 @@ use glam::{Vec2, Vec3, Vec3A};
 
 pub use area::{collect as collect_area_lights, AreaLight, Emission};
 pub use distribution::{Distribution1D, Distribution2D};
-pub use environment::{EnvironmentLight, EnvironmentSample};
+pub use environment::{DroppedTexels, EnvironmentLight, EnvironmentSample};
 pub use punctual::{PunctualKind, PunctualLight};
 
 use crate::frame::Frame;
@@ -201,6 +201,27 @@ impl Lights {
             light_of_triangle,
             center,
             radius,
+        }
+    }
+
+    /// A bound on the scene's emission, for choosing the resolution of fixed-point splat sums
+    /// (`ExactSplatGrid`): the largest radiance component of any area light or the
+    /// environment, or the largest intensity component of a punctual light; 1 when the scene
+    /// has no light or only non-finite values.
+    #[must_use]
+    pub fn emission_bound(&self) -> f32 {
+        let area = self.area.iter().map(|l| l.radiance.max_element());
+        let punctual = self.punctual.iter().map(|l| l.intensity.max_element());
+        let env = self.environment.iter().map(EnvironmentLight::max_radiance);
+        let bound = area
+            .chain(punctual)
+            .chain(env)
+            .filter(|v| v.is_finite())
+            .fold(0.0f32, f32::max);
+        if bound > 0.0 {
+            bound
+        } else {
+            1.0
         }
     }
 

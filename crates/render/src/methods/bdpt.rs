@@ -10,6 +10,7 @@ use crate::budget::Budget;
 use crate::error::RenderError;
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
+use crate::shard::Partial;
 
 /// `bdpt`'s settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,14 +63,14 @@ impl Method for BdptSettings {
             Budget::SamplesPerPixel(n) => (Some(n), None),
             Budget::Time(t) => (None, Some(t)),
         };
-        let out = bdpt::render_bdpt_sampled(
+        let out = bdpt::render_bdpt_shard(
             scene,
             &params,
             self.sampler,
-            spp,
-            time,
+            (spp, time),
             common.seed,
             self.strategy_images,
+            run.shard,
             run.progress,
             run.cancel,
         );
@@ -82,7 +83,13 @@ impl Method for BdptSettings {
             out.cancelled,
             Unsampled::CameraSamples,
         ));
+        let partial = out.component.map(|c| Partial {
+            width: out.image.width,
+            height: out.image.height,
+            components: vec![c],
+        });
         Ok(RenderOutput {
+            partial,
             samples: out.samples,
             dropped_nonfinite: out.dropped,
             cancelled: out.cancelled,

@@ -112,6 +112,7 @@ pub fn run(
         sampler,
         budget,
         common.seed,
+        run.shard,
         run.progress,
         run.cancel,
     );

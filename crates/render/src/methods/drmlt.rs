@@ -86,7 +86,9 @@ impl Method for DrmltSettings {
         let (w, h) = (common.width, common.height);
         let mut notes = emitter_notes(scene);
         notes.extend(depth_note(common));
-        let mlt_settings = self.chain.mlt_settings(common, PATH_STREAMS, true);
+        let mlt_settings = self
+            .chain
+            .mlt_settings(common, PATH_STREAMS, true, run.shard);
         let out = if self.variant == DrVariant::CheapThenExpensive {
             notes.push(format!(
                 "delayed rejection: cheap-then-expensive (Gaussian sigma {} then MALA, Green-Mira) on MMLT{}; {}",

@@ -11,6 +11,7 @@ use crate::integrator::pt::ROULETTE_DEPTH;
 use crate::integrator::pt_driver::PtDriverSettings;
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
+use crate::shard::Partial;
 
 /// `lqmc`'s settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,6 +61,7 @@ impl Method for LqmcSettings {
             seed: common.seed,
             sampler: SamplerKind::Independent,
             roulette: Some(ROULETTE_DEPTH),
+            shard: run.shard,
         };
         let out = render_lqmc(scene, &pt, &self.params, run.progress, run.cancel);
         let stats = LqmcStats {
@@ -78,7 +80,13 @@ impl Method for LqmcSettings {
             out.cancelled,
             Unsampled::SeedPaths,
         ));
+        let partial = out.component.map(|c| Partial {
+            width: out.image.width,
+            height: out.image.height,
+            components: vec![c],
+        });
         Ok(RenderOutput {
+            partial,
             samples: out.seeds,
             dropped_nonfinite: out.dropped_nonfinite,
             cancelled: out.cancelled,

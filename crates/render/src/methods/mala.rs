@@ -77,13 +77,23 @@ impl MalaSettings {
 
 /// One line on the Langevin settings for the render notes.
 pub(super) fn mala_note(config: &MalaConfig) -> String {
+    let gradients = match config.gradient {
+        GradientMethod::Dual => format!(
+            "gradients by forward-mode dual numbers (--mala-gradient dual; central finite \
+             differences, h = {:e}, where they do not apply)",
+            config.fd_step
+        ),
+        GradientMethod::FiniteDifference => format!(
+            "gradients by central finite differences (--mala-gradient fd, h = {:e})",
+            config.fd_step
+        ),
+    };
     format!(
-        "Langevin MLT: {} (epsilon {}, truncation {}), MALA on MMLT depths <= {} and Kelemen beyond; gradients by central finite differences (h = {:e})",
+        "Langevin MLT: {} (epsilon {}, truncation {}), MALA on MMLT depths <= {} and Kelemen beyond; {gradients}",
         config.variant.name(),
         config.params.epsilon,
         config.params.max_gradient,
         config.max_depth,
-        config.fd_step
     )
 }
 
@@ -110,7 +120,9 @@ impl Method for MalaSettings {
         let params = bdpt_params(common, BdptParams::default().roulette);
         let mut notes = emitter_notes(scene);
         notes.extend(depth_note(common));
-        let mlt_settings = self.chain.mlt_settings(common, PATH_STREAMS, false);
+        let mlt_settings = self
+            .chain
+            .mlt_settings(common, PATH_STREAMS, false, run.shard);
         notes.push(mala_note(&self.config));
         let out = mala::render(
             scene,
@@ -123,5 +135,25 @@ impl Method for MalaSettings {
             run.cancel,
         );
         Ok(mcmc_output(out, notes, run.start.elapsed()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_note_names_the_gradient_in_use() {
+        let mut config = MalaSettings::luan2020().config;
+        config.gradient = GradientMethod::Dual;
+        let dual = mala_note(&config);
+        assert!(dual.contains("dual numbers"), "{dual}");
+        config.gradient = GradientMethod::FiniteDifference;
+        let fd = mala_note(&config);
+        assert!(
+            fd.contains("central finite differences") && !fd.contains("dual"),
+            "{fd}"
+        );
+        assert_ne!(dual, fd);
     }
 }

@@ -100,7 +100,9 @@ impl Method for MmltSettings {
         let mut notes = emitter_notes(scene);
         notes.extend(depth_note(common));
         let kernel = PssKernel::new(self.chain.small_step, &self.raster, w, h);
-        let mlt_settings = self.chain.mlt_settings(common, PATH_STREAMS, false);
+        let mlt_settings = self
+            .chain
+            .mlt_settings(common, PATH_STREAMS, false, run.shard);
         let estimator = MltEstimator {
             large_step_mis: self.large_step_mis,
             chain_allocation: self.chain_allocation,

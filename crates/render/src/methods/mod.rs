@@ -29,6 +29,7 @@ use pss::{PssmltProposal, RasterParams, RasterStep, SmallMutation, SmallStep};
 use crate::bdpt::{BdptParams, Roulette};
 use crate::error::RenderError;
 use crate::scene::Scene;
+use crate::shard::Shard;
 
 pub mod bdpt;
 pub mod direct_pass;
@@ -71,6 +72,9 @@ pub struct Run<'a> {
     pub progress: &'a dyn Progress,
     /// Set (e.g. by a Ctrl-C handler) to stop early with the partial image.
     pub cancel: &'a AtomicBool,
+    /// The part of the render's fixed work list to render ([`Shard::WHOLE`]: all of it);
+    /// a sharded render returns its accumulators in [`RenderOutput::partial`].
+    pub shard: Shard,
 }
 
 impl fmt::Debug for Run<'_> {

@@ -9,6 +9,7 @@ use mcmc_core::stats::AcceptanceStats;
 use crate::image::Image;
 use crate::mlt::pathmlt::AdaptSummary;
 use crate::mlt::MltOutput;
+use crate::shard::Partial;
 
 /// The result of a render.
 #[derive(Clone, Debug)]
@@ -43,6 +44,9 @@ pub struct RenderOutput {
     pub sigma_map: Option<Vec<f64>>,
     /// LQMC's run statistics (`None` for the other methods).
     pub lqmc: Option<LqmcStats>,
+    /// A sharded render's accumulators, which add up with the other shards' to the whole
+    /// render ([`crate::shard`]); `None` for an unsharded render.
+    pub partial: Option<Partial>,
 }
 
 impl RenderOutput {
@@ -63,6 +67,7 @@ impl RenderOutput {
             mcmc: None,
             sigma_map: None,
             lqmc: None,
+            partial: None,
         }
     }
 }
@@ -271,6 +276,11 @@ pub fn mcmc_output(out: MltOutput, mut notes: Vec<String>, elapsed: Duration) ->
         notes,
         stage_map: out.stage_map,
         mcmc: Some(mcmc),
+        partial: out.component.map(|c| Partial {
+            width: out.image.width,
+            height: out.image.height,
+            components: vec![c],
+        }),
         ..RenderOutput::new(out.image, elapsed)
     }
 }

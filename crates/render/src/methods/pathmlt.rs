@@ -98,6 +98,7 @@ impl Method for PathMltSettings {
             seed: common.seed,
             streams: 1,
             stage_map: false,
+            shard: run.shard,
         };
         let mut params = adapt_params(self.adapt, &mlt_settings);
         if self.adapt == PathAdapt::Quadtree {
@@ -122,7 +123,7 @@ impl Method for PathMltSettings {
         )?;
         let mut notes = emitter_notes(scene);
         notes.push(format!(
-            "path-space MLT: {} perturbation (sigma {}) and the bidirectional mutation, 0.5 each; no large steps (--large-step is ignored)",
+            "path-space MLT: {} perturbation (sigma {}) and the bidirectional mutation, 0.5 each; no large steps",
             match self.perturbation {
                 PerturbationKind::Lens => "lens",
                 PerturbationKind::MultiChain => "multi-chain",

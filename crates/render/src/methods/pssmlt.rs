@@ -180,7 +180,9 @@ impl Method for PssmltSettings {
         } else {
             0
         };
-        let mut mlt_settings = self.chain.mlt_settings(common, PATH_STREAMS, false);
+        let mut mlt_settings = self
+            .chain
+            .mlt_settings(common, PATH_STREAMS, false, run.shard);
         if let Some(spent) = spent {
             mlt_settings.budget = remaining(mlt_settings.budget, spent);
         }
@@ -222,6 +224,9 @@ impl Method for PssmltSettings {
             ));
             output.unsampled_pixels = d.pass.unsampled_pixels;
             direct::add_into(&mut output.image, &d.pass.image);
+            if let (Some(partial), Some(c)) = (output.partial.as_mut(), d.pass.component) {
+                partial.components.push(c);
+            }
             output.dropped_nonfinite += d.pass.dropped;
             output.cancelled |= d.pass.cancelled;
             if let Some(stats) = output.mcmc.as_mut() {

@@ -13,6 +13,7 @@ use crate::integrator::pt_driver::{self, PtDriverSettings, PtOutput};
 use crate::integrator::qmc;
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
+use crate::shard::{Component, Partial};
 
 /// `pt`: path tracing over a per-pixel sampler.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,6 +84,7 @@ fn driver_settings(
     common: &RenderSettings,
     sampler: SamplerKind,
     roulette: Option<u32>,
+    run: &Run<'_>,
 ) -> PtDriverSettings {
     PtDriverSettings {
         width: common.width,
@@ -92,6 +94,7 @@ fn driver_settings(
         seed: common.seed,
         sampler,
         roulette,
+        shard: run.shard,
     }
 }
 
@@ -105,7 +108,21 @@ fn output(scene: &Scene, out: PtOutput, run: &Run<'_>) -> RenderOutput {
         out.cancelled,
         Unsampled::Black,
     ));
+    let partial = (!run.shard.is_whole()).then(|| {
+        let (sum, weight) = out.film.sums();
+        Partial {
+            width: out.image.width,
+            height: out.image.height,
+            components: vec![Component::Film {
+                sum: sum.to_vec(),
+                weight: weight.to_vec(),
+                light: None,
+                light_samples: 0,
+            }],
+        }
+    });
     RenderOutput {
+        partial,
         samples: out.samples,
         dropped_nonfinite: out.dropped_nonfinite,
         cancelled: out.cancelled,
@@ -130,7 +147,7 @@ impl Method for PtSettings {
         common: &RenderSettings,
         run: &Run<'_>,
     ) -> Result<RenderOutput, RenderError> {
-        let settings = driver_settings(common, self.sampler, self.roulette);
+        let settings = driver_settings(common, self.sampler, self.roulette, run);
         let out = pt_driver::render_pt(scene, &settings, run.progress, run.cancel);
         Ok(output(scene, out, run))
     }
@@ -155,7 +172,7 @@ impl Method for QmcSettings {
         common: &RenderSettings,
         run: &Run<'_>,
     ) -> Result<RenderOutput, RenderError> {
-        let settings = driver_settings(common, SamplerKind::Independent, self.roulette);
+        let settings = driver_settings(common, SamplerKind::Independent, self.roulette, run);
         let out = qmc::render_qmc_with(scene, &settings, self.scrambling, run.progress, run.cancel);
         Ok(output(scene, out, run))
     }

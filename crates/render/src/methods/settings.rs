@@ -241,13 +241,15 @@ impl ChainSettings {
         Ok(())
     }
 
-    /// The MCMC driver's settings for a render of `common`'s size, budget and seed.
+    /// The MCMC driver's settings for shard `shard` of a render of `common`'s size, budget
+    /// and seed.
     #[must_use]
     pub fn mlt_settings(
         &self,
         common: &RenderSettings,
         streams: usize,
         stage_map: bool,
+        shard: crate::shard::Shard,
     ) -> MltSettings {
         MltSettings {
             width: common.width as usize,
@@ -259,6 +261,7 @@ impl ChainSettings {
             seed: common.seed,
             streams,
             stage_map,
+            shard,
         }
     }
 }

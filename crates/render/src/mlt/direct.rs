@@ -32,10 +32,11 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use crate::bdpt::{render_bdpt_sampled, BdptOutput, BdptParams};
+use crate::bdpt::{render_bdpt_shard, BdptOutput, BdptParams};
 use crate::image::Image;
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
+use mcmc_core::render_loop::Shard;
 use mcmc_core::Progress;
 
 /// The pass's default depth K (`--direct-depth`): paths up to K bounces are the pass's, the
@@ -304,6 +305,7 @@ pub fn render_direct(
     sampler: SamplerKind,
     (spp, time): (Option<u32>, Option<Duration>),
     seed: u64,
+    shard: Shard,
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> BdptOutput {
@@ -311,14 +313,14 @@ pub fn render_direct(
         max_depth: params.max_depth.min(depth),
         ..*params
     };
-    render_bdpt_sampled(
+    render_bdpt_shard(
         scene,
         &direct,
         sampler,
-        spp.map(|n| n.max(1)),
-        time,
+        (spp.map(|n| n.max(1)), time),
         seed ^ 0xD1EC_7000_0000_0001,
         false,
+        shard,
         progress,
         cancel,
     )

@@ -13,6 +13,7 @@
 //!     width: 16, height: 16, chains: 16, bootstrap_samples: 10_000,
 //!     budget: MltBudget::MutationsPerPixel(8.0), large_step: LargeStepMode::Fixed(0.3),
 //!     seed: 1, streams: PATH_STREAMS, stage_map: false,
+//!     shard: render::shard::Shard::WHOLE,
 //! };
 //! let small = SmallStep::new(SmallMutation::Kelemen(KelemenParams::kelemen2002()));
 //! let out = MltDriver::new(&targets, &settings)
@@ -142,18 +143,20 @@ impl<'a, T, S> MltDriver<'a, T, S> {
             large_step_mis: self.estimator.large_step_mis,
             chain_allocation: self.estimator.chain_allocation,
             round_mutations: self.round_mutations.unwrap_or(defaults.round_mutations),
+            shard: self.settings.shard,
             ..defaults
         }
     }
 
-    /// A sink per job: the splats and, with [`MltSettings::stage_map`], the DR stage map.
+    /// The sink of every job: one shared set of layers (the splats and, with
+    /// [`MltSettings::stage_map`], the DR stage map), handed to each job as a clone.
     fn sink(&self) -> impl Fn() -> StagedSplats + Sync {
-        let (w, h, stage_map) = (
+        let staged = StagedSplats::new(
             self.settings.width,
             self.settings.height,
             self.settings.stage_map,
         );
-        move || StagedSplats::new(w, h, stage_map)
+        move || staged.clone()
     }
 
     /// Runs the loop over `states`, with the given normalisation if any.

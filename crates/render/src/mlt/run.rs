@@ -4,11 +4,12 @@
 use std::time::Duration;
 
 use mcmc_core::controller::LargeStepEstimate;
-use mcmc_core::render_loop::{ChainAllocation, ChainSlot, LoopOutput};
+use mcmc_core::render_loop::{ChainAllocation, ChainSlot, LoopOutput, Shard};
 use mcmc_core::stats::AcceptanceStats;
 
 use super::StagedSplats;
 use crate::image::Image;
+use crate::shard::Component;
 
 /// How the large-step probability is chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,6 +60,9 @@ pub struct MltSettings {
     /// Also accumulate the delayed-rejection stage map ([`MltOutput::stage_map`]): one more
     /// splat layer per job (only meaningful with a two-stage kernel).
     pub stage_map: bool,
+    /// The part of the fixed chain-job list to render ([`Shard::WHOLE`]: all of it); a
+    /// sharded run returns its accumulators in [`MltOutput::component`] ([`crate::shard`]).
+    pub shard: Shard,
 }
 
 /// What an MCMC render produced.
@@ -105,6 +109,8 @@ pub struct MltOutput {
     pub estimation_time: Duration,
     /// Wall-clock time of all the chains' rounds.
     pub chains_time: Duration,
+    /// A sharded run's accumulators ([`MltSettings::shard`]; `None` for the whole render).
+    pub component: Option<Component>,
 }
 
 /// How [`super::MltDriver`] makes each chain's kernel: any `Fn(p_large) -> K` (the same kernel for
@@ -203,6 +209,7 @@ pub(super) fn finish<Sh>(
                 bootstrap_time: Duration::ZERO,
                 estimation_time: Duration::ZERO,
                 chains_time: Duration::ZERO,
+                component: None,
             }
         }
     };
@@ -242,5 +249,10 @@ pub(super) fn finish<Sh>(
         bootstrap_time: out.bootstrap_time,
         estimation_time: out.first_round_time,
         chains_time: out.chains_time,
+        component: (!settings.shard.is_whole()).then(|| Component::Chains {
+            grid: (*out.sink.image).clone(),
+            b: out.b,
+            mutations: out.mutations,
+        }),
     }
 }

@@ -8,18 +8,25 @@
 //! does all the work, larger where delayed rejection rescues rejected small steps (glossy
 //! highlights and caustics in the paper). The ratio is scale-free, so it needs no `b`.
 
-use mcmc_core::render_loop::{Splat, SplatGrid, SplatSink};
+use std::sync::Arc;
+
+use mcmc_core::render_loop::{ExactSplatGrid, Splat, SplatSink};
 
 use crate::image::{luminance, Image};
 
 /// The render loop's sink for MCMC integrators: the image's splat sums and, optionally, the
 /// sums of second-stage splats (allocated only when a stage map is asked for).
+///
+/// The layers are [`ExactSplatGrid`]s shared by every job of a render (a clone shares them):
+/// one image of memory per layer for any number of jobs and threads, and sums that do not
+/// depend on the order of the splats (the same bits for any thread count, and for a render
+/// split into parts that are added up later).
 #[derive(Clone, Debug)]
 pub struct StagedSplats {
     /// All splats.
-    pub image: SplatGrid,
+    pub image: Arc<ExactSplatGrid>,
     /// Second-stage splats only (`None`: no stage map).
-    pub stage2: Option<SplatGrid>,
+    pub stage2: Option<Arc<ExactSplatGrid>>,
 }
 
 impl StagedSplats {
@@ -27,8 +34,8 @@ impl StagedSplats {
     #[must_use]
     pub fn new(width: usize, height: usize, stage_map: bool) -> Self {
         Self {
-            image: SplatGrid::new(width, height),
-            stage2: stage_map.then(|| SplatGrid::new(width, height)),
+            image: Arc::new(ExactSplatGrid::new(width, height)),
+            stage2: stage_map.then(|| Arc::new(ExactSplatGrid::new(width, height))),
         }
     }
 
@@ -58,24 +65,26 @@ impl StagedSplats {
 impl SplatSink for StagedSplats {
     #[inline]
     fn add(&mut self, splat: &Splat, weight: f64) -> bool {
-        self.image.add(splat, weight)
+        self.image.add_rgb(splat.raster, splat.rgb, weight)
     }
 
     #[inline]
     fn add_at_stage(&mut self, splat: &Splat, weight: f64, stage: u8) -> bool {
-        let added = self.image.add(splat, weight);
+        let added = self.image.add_rgb(splat.raster, splat.rgb, weight);
         if added && stage == 2 {
-            if let Some(layer) = &mut self.stage2 {
-                layer.add(splat, weight);
+            if let Some(layer) = &self.stage2 {
+                layer.add_rgb(splat.raster, splat.rgb, weight);
             }
         }
         added
     }
 
+    /// Adds `other`'s layers unless they are this sink's own (clones share their layers, so
+    /// the render loop's per-job merge is free).
     fn merge(&mut self, other: &Self) {
-        self.image.merge(&other.image);
-        if let (Some(a), Some(b)) = (&mut self.stage2, &other.stage2) {
-            a.merge(b);
+        self.image.add_grid(&other.image);
+        if let (Some(a), Some(b)) = (&self.stage2, &other.stage2) {
+            a.add_grid(b);
         }
     }
 }
@@ -98,7 +107,7 @@ mod tests {
         assert!((map.pixels[0][0] - 0.25).abs() < 1e-6);
         assert_eq!(map.pixels[1][0], 0.0);
         // The image layer holds every splat.
-        assert!((s.image.pixels()[0][0] - 4.0).abs() < 1e-12);
+        assert!((s.image.get(0, 0)[0] - 4.0).abs() < 1e-12);
         assert!(StagedSplats::new(2, 1, false).stage_map().is_none());
     }
 }

@@ -39,9 +39,11 @@ use mcmc_core::Progress;
 
 use self::explore::{ExploreStats, Explorer, SplatTarget};
 use super::pt_driver::{render_passes, PtDriverSettings};
-use crate::film::PixelRect;
+use crate::film::{exact_splat_grid, PixelRect};
 use crate::image::Image;
 use crate::scene::Scene;
+use crate::shard::Component;
+use mcmc_core::render_loop::ExactSplatGrid;
 
 pub use self::class::PathClass;
 
@@ -137,6 +139,8 @@ impl Default for LqmcParams {
 pub struct LqmcOutput {
     /// The image.
     pub image: Image,
+    /// A shard's accumulators (`None` for the whole image; [`crate::shard`]).
+    pub component: Option<Component>,
     /// Seed paths traced.
     pub seeds: u64,
     /// Progressions (samples per pixel) in the image.
@@ -158,14 +162,19 @@ pub struct LqmcOutput {
     pub unsampled_pixels: u64,
 }
 
-/// Splat sums of one work unit: its pixels plus the margin its lattice sets can reach;
-/// splats beyond it (sets in the jittered tile that wraps around the image border) are kept
-/// in a list, merged in order.
+/// Splat sums of one work unit, sparse: the splats that land in its pixels plus the margin
+/// its lattice sets can reach, summed per pixel in arrival order when the unit ends
+/// ([`SplatTile::finish`]); splats beyond the margin (sets in the jittered tile that wraps
+/// around the image border) are kept in a list, merged in order. Memory follows the splats
+/// a unit makes, not the area its sets could reach (a dense buffer over the margin would be
+/// a large fraction of the image per unit).
 struct SplatTile {
     buffer: PixelRect,
     width: usize,
     height: usize,
-    sum: Vec<[f64; 3]>,
+    /// Splats inside the buffer as (pixel index, value), in arrival order until
+    /// [`SplatTile::finish`], then one sum per pixel in pixel order.
+    inside: Vec<(u32, [f64; 3])>,
     wrapped: Vec<(usize, [f64; 3])>,
 }
 
@@ -178,31 +187,39 @@ impl SplatTile {
             y1: (rect.y1 + my).min(height),
         };
         Self {
-            sum: vec![[0.0; 3]; buffer.area()],
             buffer,
             width,
             height,
+            inside: Vec::new(),
             wrapped: Vec::new(),
         }
     }
 
-    fn merge_into(&self, width: usize, image: &mut [[f64; 3]]) {
-        let b = self.buffer;
-        let bw = b.x1 - b.x0;
-        for y in b.y0..b.y1 {
-            for x in b.x0..b.x1 {
-                let s = self.sum[(y - b.y0) * bw + (x - b.x0)];
-                let d = &mut image[y * width + x];
-                for c in 0..3 {
-                    d[c] += s[c];
+    /// Sums the inside splats per pixel: a stable sort keeps each pixel's splats in arrival
+    /// order, so every sum is the one a dense buffer would hold.
+    fn finish(&mut self) {
+        self.inside.sort_by_key(|&(i, _)| i);
+        let mut sums: Vec<(u32, [f64; 3])> = Vec::new();
+        for &(i, v) in &self.inside {
+            match sums.last_mut() {
+                Some((j, s)) if *j == i => {
+                    for c in 0..3 {
+                        s[c] += v[c];
+                    }
                 }
+                _ => sums.push((i, v)),
             }
         }
-        for &(i, s) in &self.wrapped {
-            for c in 0..3 {
-                image[i][c] += s[c];
-            }
-        }
+        self.inside = sums;
+    }
+
+    /// Adds the unit's sums to `image`; returns the number of sums too large for it.
+    fn merge_into(&self, image: &ExactSplatGrid) -> u64 {
+        let inside = self.inside.iter().map(|&(i, s)| (i as usize, s));
+        inside
+            .chain(self.wrapped.iter().copied())
+            .filter(|&(i, s)| !image.add_f64(i, s))
+            .count() as u64
     }
 }
 
@@ -218,11 +235,8 @@ impl SplatTarget for SplatTile {
             }
             return;
         }
-        let i = (y as usize - b.y0) * (b.x1 - b.x0) + (x as usize - b.x0);
-        let s = &mut self.sum[i];
-        for c in 0..3 {
-            s[c] += v[c];
-        }
+        self.inside
+            .push(((y as usize * self.width + x as usize) as u32, v));
     }
 }
 
@@ -251,6 +265,7 @@ pub fn render_lqmc(
             Explorer::new(scene, &camera, *params, settings.max_depth, settings.seed);
         for s in first..first + count {
             if cancel.load(Ordering::Relaxed) {
+                tile.finish();
                 return ((tile, explorer.stats), false);
             }
             for y in rect.y0..rect.y1 {
@@ -260,28 +275,36 @@ pub fn render_lqmc(
             }
             progress.advance(rect.area() as u64);
         }
+        tile.finish();
         ((tile, explorer.stats), true)
     };
-    let mut image = vec![[0.0f64; 3]; w * h];
-    let mut partial: Option<(Vec<[f64; 3]>, u32)> = None;
+    // Splat sums in exact fixed point: sets splat across tiles, and exact sums do not depend
+    // on the order tiles are merged in (the same bits for any thread count and any split of
+    // the tiles over shards).
+    let bound = scene.lights().emission_bound();
+    let image = exact_splat_grid(w, h, bound);
+    let mut partial: Option<ExactSplatGrid> = None;
     let mut progressions = 0u32;
     let mut totals = ExploreStats::default();
+    let mut too_large = 0u64;
+    let shard = settings.shard;
     let outcome = render_passes(
         settings.width,
         settings.height,
         settings.budget,
+        shard,
         progress,
         cancel,
         render_tile,
         |_, count, done| {
-            let complete = done.iter().all(|t| matches!(t, Some((_, true))));
-            let mut pass = if complete {
-                None
-            } else {
-                Some(vec![[0.0f64; 3]; w * h])
-            };
+            let units = done.len();
+            let complete = done
+                .iter()
+                .enumerate()
+                .all(|(i, t)| !shard.owns(i, units) || matches!(t, Some((_, true))));
+            let pass = (!complete).then(|| exact_splat_grid(w, h, bound));
             for ((tile, stats), _) in done.iter().flatten() {
-                tile.merge_into(w, pass.as_mut().map_or(&mut image, |p| p.as_mut_slice()));
+                too_large += tile.merge_into(pass.as_ref().unwrap_or(&image));
                 if complete || progressions == 0 {
                     add_stats(&mut totals, stats);
                 }
@@ -289,29 +312,20 @@ pub fn render_lqmc(
             if complete {
                 progressions += count;
             } else if progressions == 0 && partial.is_none() {
-                partial = pass.map(|p| (p, count));
+                partial = pass;
             }
         },
     );
-    let (sums, n) = match (progressions, partial) {
-        (0, Some((p, _))) => (p, 1),
+    let (grid, n) = match (progressions, partial) {
+        (0, Some(p)) => (p, 1),
         _ => (image, progressions.max(1)),
     };
-    let mut out = Image::new(w, h);
-    let mut dropped = totals.nonfinite;
-    for y in 0..h {
-        for x in 0..w {
-            let s = sums[y * w + x];
-            let v: [f32; 3] = std::array::from_fn(|c| (s[c] / f64::from(n)) as f32);
-            if v.iter().all(|c| c.is_finite()) {
-                out.set(x, y, v);
-            } else {
-                dropped += 1;
-            }
-        }
-    }
+    let component = Component::Mean { grid, divisor: n };
+    let (out, overflowed) = component.image(w, h);
+    let dropped = totals.nonfinite + overflowed + too_large;
     LqmcOutput {
         image: out,
+        component: (!shard.is_whole()).then_some(component),
         seeds: totals.seeds,
         progressions,
         explored: totals.explored,
@@ -350,6 +364,7 @@ mod tests {
             seed: 1,
             sampler: crate::sampler::SamplerKind::Independent,
             roulette: Some(crate::integrator::pt::ROULETTE_DEPTH),
+            shard: mcmc_core::render_loop::Shard::WHOLE,
         };
         let out = render_lqmc(
             &scene,

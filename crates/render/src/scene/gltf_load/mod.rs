@@ -38,14 +38,12 @@ pub(super) fn load_path(path: &Path, options: &LoadOptions) -> Result<Scene, Ren
         path: path.to_path_buf(),
         source,
     };
-    let meta = std::fs::metadata(path).map_err(io_err)?;
-    if !meta.is_file() {
-        return Err(io_err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            format!("not a regular file ({})", file_kind(&meta)),
-        )));
-    }
-    let bytes = std::fs::read(path).map_err(io_err)?;
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut crate::files::open_regular(path).map_err(io_err)?,
+        &mut bytes,
+    )
+    .map_err(io_err)?;
     let base = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -68,32 +66,6 @@ pub(super) fn load_slice(
         warnings: Vec::new(),
     }
     .load(bytes)
-}
-
-/// What a file's metadata says it is, for error messages.
-fn file_kind(meta: &std::fs::Metadata) -> &'static str {
-    let ty = meta.file_type();
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if ty.is_fifo() {
-            return "a FIFO";
-        }
-        if ty.is_char_device() {
-            return "a character device";
-        }
-        if ty.is_block_device() {
-            return "a block device";
-        }
-        if ty.is_socket() {
-            return "a socket";
-        }
-    }
-    if ty.is_dir() {
-        "a directory"
-    } else {
-        "a special file"
-    }
 }
 
 /// One glTF document being read: the file it came from (for errors), the folder its URIs

@@ -4,8 +4,9 @@
 use std::io::Read;
 use std::path::{Component, PathBuf};
 
-use super::{file_kind, Loader};
+use super::Loader;
 use crate::error::RenderError;
+use crate::files;
 use crate::scene::MAX_IMAGE_FILE_BYTES;
 
 /// How much of a URI's target [`Loader::read_uri`] reads.
@@ -95,18 +96,16 @@ impl Loader<'_> {
         let path = self.resolve(uri, &field)?;
         let cannot =
             |e: std::io::Error| self.err(format!("{field}: cannot read '{}': {e}", path.display()));
-        let not_regular = |meta: &std::fs::Metadata| {
-            self.err(format!(
-                "{field}: '{}' is {}, not a regular file; only regular files are read",
-                path.display(),
-                file_kind(meta)
-            ))
+        // Only regular files, checked before opening (opening a FIFO blocks) and on the
+        // opened file (the path may have been replaced meanwhile).
+        let refuse = |e: std::io::Error| {
+            if e.kind() == std::io::ErrorKind::InvalidInput {
+                self.err(format!("{field}: '{}' is {e}", path.display()))
+            } else {
+                cannot(e)
+            }
         };
-        // Checked before opening: opening a FIFO blocks until someone writes to it.
-        let meta = std::fs::metadata(&path).map_err(cannot)?;
-        if !meta.is_file() {
-            return Err(not_regular(&meta));
-        }
+        let meta = files::regular_file_metadata(&path).map_err(refuse)?;
         let max = match limit {
             UriLimit::UpTo(n) => n,
             UriLimit::Image if meta.len() > MAX_IMAGE_FILE_BYTES => {
@@ -114,12 +113,8 @@ impl Loader<'_> {
             }
             UriLimit::Image => MAX_IMAGE_FILE_BYTES + 1,
         };
-        let file = std::fs::File::open(&path).map_err(cannot)?;
-        // What was opened is what counts (the path may have been replaced meanwhile).
+        let file = files::open_regular(&path).map_err(refuse)?;
         let meta = file.metadata().map_err(cannot)?;
-        if !meta.is_file() {
-            return Err(not_regular(&meta));
-        }
         let mut out = Vec::with_capacity(usize::try_from(meta.len().min(max)).unwrap_or(0));
         file.take(max).read_to_end(&mut out).map_err(cannot)?;
         if limit == UriLimit::Image && out.len() as u64 > MAX_IMAGE_FILE_BYTES {
