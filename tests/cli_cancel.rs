@@ -4,15 +4,14 @@
 
 mod common;
 
-use std::process::{Command, Output};
+use std::process::Output;
 
 use common::{chainlight, path_str, stderr, stdout, temp_dir};
 use render::image_io::read_exr;
 use render::INTEGRATORS;
 
-/// Runs `chainlight args`, sends it SIGINT (Ctrl-C) `wait` after it reports that the render
-/// started (the "rendering ..." line comes after the Ctrl-C handler is installed), and returns
-/// its output, its stderr lines after the first, and how long it took to exit after the signal.
+/// Runs `chainlight args` and sends it SIGINT (Ctrl-C) `wait` after the render started
+/// ([`common::signal_after_start`]).
 #[cfg(unix)]
 fn interrupt(
     args: &[&str],
@@ -21,35 +20,14 @@ fn interrupt(
     signal(args, wait, "INT")
 }
 
-/// [`interrupt`] with the signal `name` (`INT`, `TERM`, ...).
+/// [`interrupt`] with the signal `name` (`INT`, `TERM`, ...): [`common::signal_after_start`].
 #[cfg(unix)]
 fn signal(
     args: &[&str],
     wait: std::time::Duration,
     name: &str,
 ) -> (Output, Vec<String>, std::time::Duration) {
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
-
-    let mut child = Command::new(env!("CARGO_BIN_EXE_chainlight"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stderr_lines = BufReader::new(child.stderr.take().unwrap()).lines();
-    let first = stderr_lines.next().unwrap().unwrap();
-    assert!(first.starts_with("rendering"), "{first}");
-    std::thread::sleep(wait);
-    let status = Command::new("kill")
-        .args([&format!("-{name}"), &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let interrupted = std::time::Instant::now();
-    let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
-    let output = child.wait_with_output().unwrap();
-    (output, rest, interrupted.elapsed())
+    common::signal_after_start(args, name, wait)
 }
 
 /// Ctrl-C (SIGINT) during a long render still writes the partial image and exits with 0.

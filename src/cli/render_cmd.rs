@@ -422,6 +422,14 @@ fn print_summary(
         per_pixel(output, settings),
         if output.cancelled { ", cancelled" } else { "" }
     );
+    if output.unsampled_pixels > 0 {
+        println!(
+            "unsampled   {} pixels ({:.1} %): the image is incomplete",
+            output.unsampled_pixels,
+            100.0 * output.unsampled_pixels as f64
+                / (f64::from(settings.width) * f64::from(settings.height))
+        );
+    }
     println!("rate        {rate:.0} samples/s");
     println!("non-finite  {} samples dropped", output.dropped_nonfinite);
     println!("elapsed     {secs:.2} s");

@@ -53,6 +53,40 @@ pub fn assert_fails_with(args: &[&str], needles: &[&str]) {
     assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
 }
 
+/// Runs `chainlight args`, sends it `signal` (`"INT"`: Ctrl-C, `"TERM"`) `wait` after it
+/// reports that the render started (the "rendering ..." line comes after the signal handler
+/// is installed), and returns its output, its stderr lines after the first, and how long it
+/// took to exit after the signal.
+#[cfg(unix)]
+pub fn signal_after_start(
+    args: &[&str],
+    signal: &str,
+    wait: std::time::Duration,
+) -> (Output, Vec<String>, std::time::Duration) {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_chainlight"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr_lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let first = stderr_lines.next().unwrap().unwrap();
+    assert!(first.starts_with("rendering"), "{first}");
+    std::thread::sleep(wait);
+    let status = Command::new("kill")
+        .args([&format!("-{signal}"), &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let signalled = std::time::Instant::now();
+    let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
+    let output = child.wait_with_output().unwrap();
+    (output, rest, signalled.elapsed())
+}
+
 /// Runs `chainlight args` in `dir` (the current directory if `None`), failing the test if it
 /// has not exited after `limit` (it is killed): for inputs that used to hang the commands.
 pub fn chainlight_within(args: &[&str], dir: Option<&Path>, limit: std::time::Duration) -> Output {

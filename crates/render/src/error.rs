@@ -45,6 +45,24 @@ pub enum RenderError {
     /// The requested integrator is not implemented by [`crate::session::render`].
     #[error("integrator {0} is not supported by this renderer")]
     UnsupportedIntegrator(String),
+    /// The render would need more memory than is available: refused before any work
+    /// (`render::methods::memory::check`).
+    #[error(
+        "not enough memory: the render needs about {} but {} is available ({limit}): {advice}",
+        Bytes(*needed),
+        Bytes(*available)
+    )]
+    OutOfMemory {
+        /// The estimated peak in bytes.
+        needed: u64,
+        /// The bytes available.
+        available: u64,
+        /// What limits them (`/proc/meminfo`, the address-space limit, or the environment
+        /// variable `CHAINLIGHT_MEMORY_LIMIT`).
+        limit: String,
+        /// What the estimate is made of and which flags would make the render fit.
+        advice: String,
+    },
     /// The worker thread pool could not be created.
     #[error("cannot start {threads} worker threads: {reason}")]
     ThreadPool {
@@ -53,6 +71,23 @@ pub enum RenderError {
         /// The reason reported by rayon.
         reason: String,
     },
+}
+
+/// Bytes as `12.34 GiB`, `456 MiB` or `789 KiB`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bytes(pub u64);
+
+impl std::fmt::Display for Bytes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let b = self.0 as f64;
+        if b >= (1u64 << 30) as f64 {
+            write!(f, "{:.2} GiB", b / (1u64 << 30) as f64)
+        } else if b >= (1u64 << 20) as f64 {
+            write!(f, "{:.0} MiB", b / (1u64 << 20) as f64)
+        } else {
+            write!(f, "{:.0} KiB", b / 1024.0)
+        }
+    }
 }
 
 impl RenderError {

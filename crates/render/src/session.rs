@@ -91,10 +91,14 @@ pub fn validate(settings: &RenderSettings) -> Result<(), RenderError> {
 /// `cancel` stops the render within a fraction of a second and returns the samples taken so
 /// far, each pixel normalised by its own samples, with `cancelled: true`.
 ///
+/// Before any work the render's peak memory is estimated
+/// ([`crate::methods::memory::estimate`]) and a render that does not fit in the available
+/// memory is refused.
+///
 /// # Errors
-/// [`RenderError::InvalidSetting`] for out-of-range settings, [`RenderError::ThreadPool`] if
-/// the threads cannot be started, and the method's own refusals (e.g. a scene it cannot
-/// render).
+/// [`RenderError::InvalidSetting`] for out-of-range settings, [`RenderError::OutOfMemory`]
+/// for a render estimated not to fit, [`RenderError::ThreadPool`] if the threads cannot be
+/// started, and the method's own refusals (e.g. a scene it cannot render).
 pub fn render(
     scene: &Scene,
     settings: &RenderSettings,
@@ -128,6 +132,7 @@ pub fn render_shard(
             "K/N with 0 <= K < N",
         ));
     }
+    crate::methods::memory::check(settings, scene)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
         .build()

@@ -3,10 +3,11 @@
 //! count.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
+use super::resample::{allocate, unit, ChunkSums, Resampling, MAX_CHUNKS, MIN_CHUNKS};
 use crate::progress::Progress;
 use crate::seed::{chain_seed, mix64};
 use crate::target::Target;
@@ -103,14 +104,6 @@ pub fn bootstrap_key(seed: u64, target: usize, index: u64) -> u64 {
     chain_seed(per_target, index)
 }
 
-/// Maximum number of chunk sums kept by the bootstrap (128 KiB of memory); with one set of
-/// chunk sums per target ([`ChainAllocation::PerTarget`]) each target keeps
-/// `MAX_CHUNKS / targets` of them (at least [`MIN_CHUNKS`]).
-const MAX_CHUNKS: usize = 1 << 14;
-
-/// Fewest chunk sums a target keeps under [`ChainAllocation::PerTarget`].
-const MIN_CHUNKS: usize = 16;
-
 /// Samples evaluated per parallel batch (rounded to whole rows of all targets).
 const BATCH: u64 = 8192;
 
@@ -148,55 +141,6 @@ pub enum ChainAllocation {
     PerTargetWithJointScale,
 }
 
-/// Sums of a stream of weights over chunks of `chunk` consecutive samples; when the chunk
-/// count reaches `max`, neighbouring chunks are merged and the chunk size doubles, so
-/// memory stays bounded whatever the number of samples.
-#[derive(Clone, Debug)]
-struct ChunkSums {
-    chunk: u64,
-    sums: Vec<f64>,
-    open: f64,
-    in_open: u64,
-    max: usize,
-}
-
-impl ChunkSums {
-    fn new(max: usize) -> Self {
-        Self {
-            chunk: 1,
-            sums: Vec::new(),
-            open: 0.0,
-            in_open: 0,
-            max: max.max(2) & !1,
-        }
-    }
-
-    fn push(&mut self, w: f64) {
-        self.open += w;
-        self.in_open += 1;
-        if self.in_open == self.chunk {
-            self.sums.push(self.open);
-            self.open = 0.0;
-            self.in_open = 0;
-            if self.sums.len() == self.max {
-                for j in 0..self.max / 2 {
-                    self.sums[j] = self.sums[2 * j] + self.sums[2 * j + 1];
-                }
-                self.sums.truncate(self.max / 2);
-                self.chunk *= 2;
-            }
-        }
-    }
-
-    /// Closes the last (partial) chunk.
-    fn finish(mut self) -> (u64, Vec<f64>) {
-        if self.in_open > 0 {
-            self.sums.push(self.open);
-        }
-        (self.chunk, self.sums)
-    }
-}
-
 /// What the bootstrap found.
 #[derive(Clone, Debug)]
 pub(crate) struct BootstrapOutcome {
@@ -214,10 +158,46 @@ pub(crate) struct BootstrapOutcome {
     pub starts: Vec<(usize, u64)>,
     /// Chains per target (the counts of `starts`).
     pub target_chains: Vec<usize>,
+    /// Samples with positive weight per target (whole groups only, as `target_b`).
+    pub target_hits: Vec<u64>,
     /// True if the time share of the budget ran out before all samples were evaluated.
     pub stopped_early: bool,
+    /// With [`BootstrapPlan::time_cap`]: the chain count the remaining time affords, if it
+    /// is below the requested one (`starts` then holds that many).
+    pub time_capped: Option<usize>,
     /// True if cancelled.
     pub cancelled: bool,
+}
+
+/// The chains a time budget affords: what is left of it must give each chain its start (one
+/// evaluation) and at least `min_mutations` mutations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct TimeCap {
+    /// The end of the whole loop's budget.
+    pub deadline: Instant,
+    /// The fewest mutations each chain should get.
+    pub min_mutations: u64,
+}
+
+impl TimeCap {
+    /// The most chains (at least 1, at most `requested`) that `remaining` affords at `rate`
+    /// target evaluations per second (the bootstrap's, all threads), when starting a chain
+    /// costs `start_cost` evaluations (its start's re-evaluation and resampling's).
+    pub(crate) fn chains(
+        &self,
+        requested: usize,
+        rate: f64,
+        remaining: Duration,
+        start_cost: u64,
+    ) -> usize {
+        let evaluations = rate * remaining.as_secs_f64();
+        let affordable = evaluations / start_cost.saturating_add(self.min_mutations) as f64;
+        if affordable.is_finite() && affordable < requested as f64 {
+            (affordable.floor() as usize).clamp(1, requested)
+        } else {
+            requested
+        }
+    }
 }
 
 /// The bootstrap's parameters.
@@ -229,14 +209,22 @@ pub(crate) struct BootstrapPlan<'a> {
     /// Per-target integrals to allocate chains by instead of the bootstrap's (targets whose
     /// bootstrap found nothing get none).
     pub allocation_b: Option<&'a [f64]>,
+    /// When the bootstrap's share of a time budget ends (it stops between batches after
+    /// that, once it has `min_rows` rows).
     pub deadline: Option<Instant>,
+    /// Rows (samples of every target) taken before `deadline` may stop the bootstrap: the
+    /// largest strata count, so that every target has a whole group.
+    pub min_rows: u64,
+    /// Under a time budget: cap the chains at what the rest of the budget affords, measured
+    /// at the bootstrap's rate, before resampling their starts.
+    pub time_cap: Option<TimeCap>,
     pub progress: &'a dyn Progress,
     pub cancel: &'a AtomicBool,
 }
 
 /// The weight of stream sample `sample` (target `sample % D`, index `sample / D`); 0 for
 /// indices at or beyond the target's `limits` entry (a partial group of strata).
-fn weight_of<T, Src>(
+pub(super) fn weight_of<T, Src>(
     targets: &[T],
     source: &Src,
     seed: u64,
@@ -265,63 +253,6 @@ where
     } else {
         0.0
     }
-}
-
-/// Chains per target: proportional to `target_b` by largest remainders, at least one per
-/// target with positive `b_d` if `chains` allows (ties go to the lower index).
-pub(crate) fn allocate(target_b: &[f64], chains: usize) -> Vec<usize> {
-    let positive = |b: f64| b.is_finite() && b > 0.0;
-    let total: f64 = target_b.iter().copied().filter(|&b| positive(b)).sum();
-    let quota: Vec<f64> = target_b
-        .iter()
-        .map(|&b| {
-            if positive(b) && total > 0.0 {
-                chains as f64 * b / total
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let mut n: Vec<usize> = quota.iter().map(|q| q.floor() as usize).collect();
-    let n_positive = target_b.iter().filter(|&&b| positive(b)).count();
-    if n_positive == 0 {
-        return n;
-    }
-    if n_positive <= chains {
-        for (k, &b) in n.iter_mut().zip(target_b) {
-            if positive(b) && *k == 0 {
-                *k = 1;
-            }
-        }
-    }
-    let mut assigned: usize = n.iter().sum();
-    while assigned < chains {
-        let best = (0..n.len())
-            .filter(|&t| positive(target_b[t]))
-            .max_by(|&a, &c| {
-                (quota[a] - n[a] as f64)
-                    .total_cmp(&(quota[c] - n[c] as f64))
-                    .then(c.cmp(&a))
-            })
-            .unwrap_or_else(|| unreachable!("n_positive > 0"));
-        n[best] += 1;
-        assigned += 1;
-    }
-    while assigned > chains {
-        let Some(best) = (0..n.len())
-            .filter(|&t| n[t] > 1 || (n_positive > chains && n[t] > 0))
-            .max_by(|&a, &c| {
-                (n[a] as f64 - quota[a])
-                    .total_cmp(&(n[c] as f64 - quota[c]))
-                    .then(c.cmp(&a))
-            })
-        else {
-            break;
-        };
-        n[best] -= 1;
-        assigned -= 1;
-    }
-    n
 }
 
 /// Runs the bootstrap: `per_target` independent samples of every target, sample `i` of target
@@ -357,14 +288,19 @@ where
     };
     let (mut sum, mut sum_sq_rows, mut evaluated) = (0.0f64, 0.0f64, 0u64);
     let mut target_sums = vec![0.0f64; d as usize];
+    let mut target_hits = vec![0u64; d as usize];
     let (mut stopped_early, mut cancelled) = (false, false);
     let init = || (source.empty(), T::Payload::default());
+    let started = Instant::now();
     while evaluated < total {
         if plan.cancel.load(Ordering::Relaxed) {
             cancelled = true;
             break;
         }
-        if evaluated > 0 && plan.deadline.is_some_and(|t| Instant::now() >= t) {
+        if evaluated > 0
+            && evaluated / d >= plan.min_rows
+            && plan.deadline.is_some_and(|t| Instant::now() >= t)
+        {
             stopped_early = true;
             break;
         }
@@ -390,6 +326,7 @@ where
                 sums[if per_target { t } else { 0 }].push(w);
                 r += w;
                 *s += w;
+                target_hits[t] += u64::from(w > 0.0);
             }
             sum += r;
             sum_sq_rows += r * r;
@@ -423,6 +360,7 @@ where
                     &mut payload,
                 );
                 target_sums[t] -= w;
+                target_hits[t] -= u64::from(w > 0.0);
                 sum -= w;
                 let (g, pos) = if per_target { (t, i) } else { (0, sample) };
                 touched.push((g, pos / finished[g].0));
@@ -486,11 +424,26 @@ where
         evaluated,
         starts: Vec::new(),
         target_chains: vec![0; d as usize],
+        target_hits,
         stopped_early,
+        time_capped: None,
         cancelled,
     };
     if cancelled || sum.is_nan() || sum <= 0.0 || plan.chains == 0 {
         return outcome;
+    }
+    let mut chains = plan.chains;
+    if let Some(cap) = plan.time_cap {
+        let elapsed = started.elapsed().as_secs_f64();
+        let rate = evaluated as f64 / elapsed.max(1e-9);
+        let remaining = cap.deadline.saturating_duration_since(Instant::now());
+        // Starting a chain re-evaluates its start and, in resampling, at most its chunk.
+        let chunk = finished.iter().map(|f| f.0).max().unwrap_or(1);
+        let affordable = cap.chains(chains, rate, remaining, 1 + chunk);
+        if affordable < chains {
+            chains = affordable;
+            outcome.time_capped = Some(chains);
+        }
     }
     let ctx = Resampling {
         targets,
@@ -507,10 +460,10 @@ where
                 .collect(),
             None => outcome.target_b.clone(),
         };
-        let counts = allocate(&by, plan.chains);
+        let counts = allocate(&by, chains);
         // (position key in [0, 1), target, index): chains of all targets interleaved by
         // their systematic position, so that every job gets a mix of depths.
-        let mut keyed: Vec<(f64, usize, u64)> = Vec::with_capacity(plan.chains);
+        let mut keyed: Vec<(f64, usize, u64)> = Vec::with_capacity(chains);
         for (t, &n) in counts.iter().enumerate() {
             if n == 0 {
                 continue;
@@ -531,7 +484,7 @@ where
     } else {
         let (chunk, chunk_sums) = &finished[0];
         let u = unit(mix64(plan.seed ^ 0x5e1f_c4a1));
-        match ctx.resample(*chunk, chunk_sums, evaluated, plan.chains, u, |p| p) {
+        match ctx.resample(*chunk, chunk_sums, evaluated, chains, u, |p| p) {
             Some(picked) => {
                 outcome.starts = picked
                     .into_iter()
@@ -545,106 +498,6 @@ where
         outcome.target_chains[t] += 1;
     }
     outcome
-}
-
-/// A uniform number in [0, 1) from 64 random bits.
-fn unit(bits: u64) -> f64 {
-    (bits >> 11) as f64 / (1u64 << 53) as f64
-}
-
-/// What resampling needs to re-evaluate samples.
-struct Resampling<'a, 'p, T, Src: ?Sized> {
-    targets: &'a [T],
-    source: &'a Src,
-    plan: &'a BootstrapPlan<'p>,
-    limits: &'a [u64],
-}
-
-impl<T, Src> Resampling<'_, '_, T, Src>
-where
-    T: Target,
-    Src: IndependentStates<T::State> + ?Sized,
-{
-    /// Systematic resampling of `chains` positions over the chunk sums of a sequence of
-    /// `count` positions (position `p` is stream sample `to_sample(p)`), then within the
-    /// chosen chunks by re-evaluating them. Returns the chosen stream samples in position
-    /// order, or `None` if cancelled.
-    fn resample(
-        &self,
-        chunk: u64,
-        chunk_sums: &[f64],
-        count: u64,
-        chains: usize,
-        u: f64,
-        to_sample: impl Fn(u64) -> u64 + Sync,
-    ) -> Option<Vec<u64>> {
-        let (targets, source, plan) = (self.targets, self.source, self.plan);
-        let total: f64 = chunk_sums.iter().sum();
-        let step = total / chains as f64;
-        // (chunk index, offset of the position inside the chunk) per chain, in chain order.
-        let mut located = Vec::with_capacity(chains);
-        let (mut j, mut cumulative) = (0usize, 0.0f64);
-        for c in 0..chains {
-            let position = (c as f64 + u.clamp(0.0, 1.0 - f64::EPSILON)) * step;
-            while j + 1 < chunk_sums.len() && cumulative + chunk_sums[j] <= position {
-                cumulative += chunk_sums[j];
-                j += 1;
-            }
-            let (mut jj, mut offset) = (j, position - cumulative);
-            // Rounding at the very end can land in an empty chunk: use the last non-empty one.
-            while chunk_sums[jj] == 0.0 && jj > 0 {
-                jj -= 1;
-                offset = f64::INFINITY;
-            }
-            located.push((jj, offset));
-        }
-        // Re-evaluate each chosen chunk once (in parallel) and pick the samples inside it.
-        let mut chosen: Vec<usize> = located.iter().map(|l| l.0).collect();
-        chosen.dedup();
-        let picks: Vec<Option<Vec<(f64, u64)>>> = chosen
-            .par_iter()
-            .map_init(
-                || (source.empty(), T::Payload::default()),
-                |(state, payload), &j| {
-                    if plan.cancel.load(Ordering::Relaxed) {
-                        return None;
-                    }
-                    let lo = j as u64 * chunk;
-                    let hi = (lo + chunk).min(count);
-                    let mut prefix = Vec::with_capacity((hi - lo) as usize);
-                    let mut acc = 0.0;
-                    for p in lo..hi {
-                        let s = to_sample(p);
-                        let w =
-                            weight_of(targets, source, plan.seed, self.limits, s, state, payload);
-                        if w > 0.0 {
-                            acc += w;
-                            prefix.push((acc, s));
-                        }
-                    }
-                    Some(prefix)
-                },
-            )
-            .collect();
-        let mut starts = Vec::with_capacity(chains);
-        let mut k = 0;
-        for (j, offset) in located {
-            while chosen[k] != j {
-                k += 1;
-            }
-            let prefix = picks[k].as_ref()?;
-            // The first sample whose cumulative weight exceeds the offset; rounding differences
-            // between the chunk sum and the re-summed weights fall back to the chunk's last
-            // sample.
-            let i = prefix.partition_point(|&(acc, _)| acc <= offset);
-            let sample = prefix
-                .get(i)
-                .or(prefix.last())
-                .map_or_else(|| to_sample(j as u64 * chunk), |p| p.1);
-            starts.push(sample);
-        }
-        Some(starts)
-    }
 }
 
 #[cfg(test)]
@@ -685,6 +538,8 @@ mod tests {
             allocation: ChainAllocation::Joint,
             allocation_b: None,
             deadline: None,
+            min_rows: 1,
+            time_cap: None,
             progress: &NoProgress,
             cancel,
         }
@@ -699,39 +554,6 @@ mod tests {
         let picked: Vec<u64> = out.starts.iter().map(|s| s.1).collect();
         assert_eq!(picked.iter().filter(|&&i| i == 1).count(), 1, "{picked:?}");
         assert_eq!(picked.iter().filter(|&&i| i == 2).count(), 3, "{picked:?}");
-    }
-
-    #[test]
-    fn chunk_sums_stay_bounded_and_exact() {
-        let mut c = ChunkSums::new(MAX_CHUNKS);
-        let n = 3 * MAX_CHUNKS as u64 + 5;
-        for i in 0..n {
-            c.push(i as f64);
-        }
-        let (chunk, sums) = c.finish();
-        assert!(sums.len() <= MAX_CHUNKS);
-        assert_eq!(chunk, 4);
-        let expected: f64 = (0..chunk).map(|i| i as f64).sum();
-        assert_eq!(sums[0], expected);
-        assert_eq!(sums.iter().sum::<f64>(), (n * (n - 1) / 2) as f64);
-    }
-
-    #[test]
-    fn allocation_is_proportional_with_one_chain_per_positive_target() {
-        assert_eq!(allocate(&[0.5, 0.3, 0.2], 10), [5, 3, 2]);
-        // Largest remainders: quotas 6.67, 3.33 -> 7, 3.
-        assert_eq!(allocate(&[2.0, 1.0], 10), [7, 3]);
-        // At least one chain for a target with light, taken from the largest.
-        assert_eq!(allocate(&[1.0, 0.001, 0.0], 10), [9, 1, 0]);
-        assert_eq!(allocate(&[1.0, 1e-9, 1e-9, 1e-9], 4), [1, 1, 1, 1]);
-        // More targets with light than chains: proportional, no minimum.
-        assert_eq!(allocate(&[3.0, 2.0, 1.0], 2), [1, 1, 0]);
-        assert_eq!(allocate(&[0.0, 0.0], 5), [0, 0]);
-        assert_eq!(allocate(&[f64::NAN, 1.0], 3), [0, 3]);
-        for chains in 1..40 {
-            let n = allocate(&[0.7, 0.01, 0.2, 0.0, 0.09], chains);
-            assert_eq!(n.iter().sum::<usize>(), chains, "{chains}: {n:?}");
-        }
     }
 
     #[test]
@@ -766,5 +588,95 @@ mod tests {
         let out = run(&t, &Indexed, &plan(5, 3, &no));
         assert!(out.starts.is_empty());
         assert_eq!(out.b, 0.0);
+    }
+
+    /// `f_k(u) = (k + 1) u^k` on [0, 1): integral 1 for every `k`.
+    struct Power(i32);
+    impl Target for Power {
+        type State = Vec<f64>;
+        type Payload = ();
+        fn evaluate(&self, x: &mut Vec<f64>, _: &mut ()) -> f64 {
+            (f64::from(self.0 + 1) * x[0].powi(self.0)).ln()
+        }
+    }
+
+    /// One uniform number per key; target 1 stratified into `.0` strata.
+    struct Strata(u64);
+    impl IndependentStates<Vec<f64>> for Strata {
+        fn empty(&self) -> Vec<f64> {
+            vec![0.0]
+        }
+        fn independent(&self, key: u64, state: &mut Vec<f64>) {
+            state[0] = unit(mix64(key));
+        }
+        fn strata(&self, target: usize) -> u64 {
+            if target == 1 {
+                self.0
+            } else {
+                1
+            }
+        }
+        fn stratified(&self, key: u64, stratum: u64, strata: u64, state: &mut Vec<f64>) {
+            state[0] = (stratum as f64 + unit(mix64(key))) / strata as f64;
+        }
+    }
+
+    /// A time-limited bootstrap whose deadline has passed before it starts: it stops after
+    /// its first batch (4096 rows of two targets), or once it has `min_rows` rows.
+    fn stopped(seed: u64, min_rows: u64, no: &AtomicBool) -> BootstrapOutcome {
+        let targets = [Power(1), Power(2)];
+        let mut p = plan(4, 100_000, no);
+        p.seed = seed;
+        p.deadline = Some(Instant::now());
+        p.min_rows = min_rows;
+        run(&targets, &Strata(5000), &p)
+    }
+
+    #[test]
+    fn a_stopped_bootstrap_has_a_whole_group_of_every_stratified_target() {
+        // Target 1's groups have 5000 strata, more than the first batch's 4096 rows: the
+        // loop asks for `min_rows` = 5000 so that b_1 (true value 1) is estimated, not 0.
+        let no = AtomicBool::new(false);
+        for seed in 0..8 {
+            let out = stopped(seed, 5000, &no);
+            assert!(out.stopped_early, "seed {seed}");
+            assert_eq!(out.target_hits[1], 5000, "seed {seed}: one whole group");
+            let z = (out.b - 2.0) / out.standard_error;
+            assert!(
+                z.abs() < 5.0,
+                "seed {seed}: b {} (s.e. {})",
+                out.b,
+                out.standard_error
+            );
+            assert!((out.target_b[1] - 1.0).abs() < 1e-3, "{:?}", out.target_b);
+        }
+        // Negative control: stopping at the first batch leaves target 1 no whole group, so
+        // b_1 = 0 and b is half the truth, far outside its standard error.
+        let out = stopped(0, 1, &no);
+        assert_eq!(out.target_b[1], 0.0);
+        assert!(
+            (out.b - 2.0).abs() / out.standard_error > 20.0,
+            "{} ({})",
+            out.b,
+            out.standard_error
+        );
+    }
+
+    #[test]
+    fn a_time_cap_leaves_each_chain_its_minimum_mutations() {
+        let deadline = Instant::now();
+        let cap = TimeCap {
+            deadline,
+            min_mutations: 99,
+        };
+        let second = Duration::from_secs(1);
+        // 10 000 evaluations: 100 chains of one start and 99 mutations.
+        assert_eq!(cap.chains(1_000_000, 10_000.0, second, 1), 100);
+        assert_eq!(cap.chains(50, 10_000.0, second, 1), 50);
+        // Starts that cost more (resampling re-evaluates their chunk) afford fewer chains.
+        assert_eq!(cap.chains(1_000_000, 10_000.0, second, 101), 50);
+        // Nothing left: still one chain.
+        assert_eq!(cap.chains(1_000, 10_000.0, Duration::ZERO, 1), 1);
+        assert_eq!(cap.chains(1_000, f64::INFINITY, second, 1), 1_000);
     }
 }

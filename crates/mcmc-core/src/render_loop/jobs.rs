@@ -85,6 +85,11 @@ pub(crate) struct RoundsSummary<Sh> {
 /// Runs rounds of `round` mutations per chain until every chain's budget is used, the
 /// deadline passes or `cancel` is set; pools the controllers' shared statistics after every
 /// round, in job order.
+///
+/// A deadline that has already passed when the rounds start (the chains' set-up took the
+/// budget) still lets the first chain of every job run its first [`POLL_EVERY`] mutations,
+/// so that a time budget never ends with chains but no mutation (a black image); `cancel`
+/// stops even those.
 pub(crate) fn run_rounds<T, K, C, Sk>(
     jobs: &mut [Job<'_, T, K, C, Sk>],
     round: u64,
@@ -101,10 +106,16 @@ where
 {
     let mut pooled = C::Shared::default();
     let mut first_round = None;
-    let stop = || cancel.load(Ordering::Relaxed) || deadline.is_some_and(|t| Instant::now() >= t);
+    let cancelled = || cancel.load(Ordering::Relaxed);
+    let late = || deadline.is_some_and(|t| Instant::now() >= t);
+    let stop = || cancelled() || late();
     let started = Instant::now();
     loop {
-        if stop() || !jobs.iter().any(|j| j.chains.iter().any(|c| c.1 > 0)) {
+        let first = first_round.is_none();
+        if cancelled()
+            || (!first && late())
+            || !jobs.iter().any(|j| j.chains.iter().any(|c| c.1 > 0))
+        {
             break;
         }
         jobs.par_iter_mut().for_each(|job| {
@@ -121,13 +132,18 @@ where
                 return;
             }
             let mut observer = SplatObserver::new(sink);
-            'chains: for ((chain, remaining), &weight) in chains.iter_mut().zip(weights.iter()) {
+            'chains: for (i, ((chain, remaining), &weight)) in
+                chains.iter_mut().zip(weights.iter()).enumerate()
+            {
                 observer.set_weight(weight);
                 let mut left = round.min(*remaining);
+                // The first block of a job's first chain in the first round ignores the deadline.
+                let mut guaranteed = first && i == 0;
                 while left > 0 {
-                    if stop() {
+                    if cancelled() || (!guaranteed && late()) {
                         break 'chains;
                     }
+                    guaranteed = false;
                     let n = left.min(POLL_EVERY);
                     for _ in 0..n {
                         if chain.step(&mut observer).is_err() {

@@ -32,19 +32,23 @@ mod bootstrap;
 mod exact_grid;
 mod jobs;
 mod large_step_mis;
+mod notes;
+mod resample;
 mod splat;
 
 /// The shared-statistics controller interface, re-exported from [`crate::controller`] where
 /// it lives.
 pub use crate::controller::{Both, SharedController};
+use bootstrap::TimeCap;
 pub use bootstrap::{bootstrap_key, ChainAllocation, IndependentStates};
 pub use exact_grid::{ExactSplatGrid, DEFAULT_FRACTION_BITS, EXACT_GRID_BYTES_PER_PIXEL};
 #[cfg(feature = "testing")]
 pub(crate) use large_step_mis::mis_step;
 pub use large_step_mis::LargeStepMis;
+use notes::{few_hits_note, missed_targets_note};
 pub use splat::{Splat, SplatGrid, SplatObserver, SplatPayload, SplatSink};
 
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use rand::SeedableRng;
@@ -72,7 +76,9 @@ pub enum LoopBudget {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LoopSettings {
     /// Number of Markov chains (default 256; 1..=1 048 576). Capped at the number of
-    /// mutations, with a note.
+    /// mutations under a mutation budget, and under a time budget at what the time left after
+    /// the bootstrap affords (a round or [`MIN_TIME_MUTATIONS`] mutations per chain at the
+    /// bootstrap's rate), with a note.
     pub chains: usize,
     /// Independent samples per target in the bootstrap (default 100 000, pbrt's value;
     /// 1..=10^12).
@@ -168,6 +174,22 @@ pub const MAX_CHAINS: usize = 1 << 20;
 /// Largest accepted bootstrap size per target.
 pub const MAX_BOOTSTRAP_SAMPLES: u64 = 1_000_000_000_000;
 
+/// Under a time budget, the fewest mutations the loop plans per chain (or one round,
+/// [`LoopSettings::round_mutations`], if that is more: a job runs its chains one after the
+/// other, a round each, so chains beyond what the time affords in the first round would never
+/// run): the chains are capped at what the time left after the bootstrap affords at the
+/// bootstrap's rate of target evaluations (starting a chain counted as well), with a note.
+pub const MIN_TIME_MUTATIONS: u64 = 100;
+
+/// Samples with light a target's bootstrap should have before its `b_d`, and the standard
+/// error of `b`, are trusted: a target with light that got fewer (and at least a hundredth of
+/// `b`) gets a note, since rarely sampled light may as well have been missed entirely.
+pub const FEW_BOOTSTRAP_HITS: u64 = 30;
+
+/// Chain starts between two checks of the cancel flag and the deadline while the chains are
+/// set up.
+const SETUP_POLL: usize = 256;
+
 impl LoopSettings {
     /// Checks every field against its documented range.
     ///
@@ -260,6 +282,9 @@ pub struct LoopOutput<K, Sh> {
     /// Chains started per target (their starts; chains whose start failed to re-evaluate
     /// are included).
     pub target_chains: Vec<usize>,
+    /// Bootstrap samples with positive weight per target (how well each `b_d` is known:
+    /// see [`FEW_BOOTSTRAP_HITS`]).
+    pub target_hits: Vec<u64>,
     /// Bootstrap samples evaluated (over all targets).
     pub bootstrap_samples: u64,
     /// Chains that ran.
@@ -469,6 +494,14 @@ where
             LoopBudget::Time(t) => Some(start + t.mul_f64(settings.bootstrap_time_share)),
             LoopBudget::Mutations(_) => None,
         };
+        // A stratified target counts whole groups only: a time-limited bootstrap takes at
+        // least one group of every target, or that target's `b_d` would be 0.
+        let min_rows = (0..self.targets.len())
+            .map(|t| self.states.strata(t).max(1))
+            .max()
+            .unwrap_or(1)
+            .min(settings.bootstrap_samples);
+        let min_chain_mutations = MIN_TIME_MUTATIONS.max(settings.round_mutations);
         let boot = bootstrap::run(
             self.targets,
             self.states,
@@ -479,16 +512,31 @@ where
                 allocation: settings.chain_allocation,
                 allocation_b: normalization,
                 deadline: bootstrap_deadline,
+                min_rows,
+                time_cap: deadline.map(|deadline| TimeCap {
+                    deadline,
+                    min_mutations: min_chain_mutations,
+                }),
                 progress,
                 cancel,
             },
         );
         if boot.stopped_early {
             notes.push(format!(
-                "the bootstrap stopped after {} of {} samples to stay within {:.0}% of the time budget",
+                "the bootstrap stopped after {} of {} samples ({} per target) to stay within {:.0}% of the time budget",
                 boot.evaluated,
                 bootstrap_total,
+                boot.evaluated / targets_count,
                 settings.bootstrap_time_share * 100.0
+            ));
+        }
+        if normalization.is_none() {
+            notes.extend(few_hits_note(&boot.target_b, &boot.target_hits, boot.b));
+        }
+        if let Some(capped) = boot.time_capped {
+            notes.push(format!(
+                "{chains} chains requested: using {capped}, what the time left after the bootstrap affords at its rate ({:.0} samples/s) with at least {min_chain_mutations} mutations per chain",
+                boot.evaluated as f64 / start.elapsed().as_secs_f64().max(1e-9)
             ));
         }
         let mut boot = boot;
@@ -509,6 +557,7 @@ where
             b_standard_error: boot.standard_error,
             target_b: boot.target_b.clone(),
             target_chains: boot.target_chains.clone(),
+            target_hits: boot.target_hits.clone(),
             bootstrap_samples: boot.evaluated,
             chains: 0,
             mutations: 0,
@@ -525,7 +574,10 @@ where
         };
         out.notes.extend(normalization_note);
         if boot.cancelled {
-            out.notes.push("cancelled during the bootstrap".to_owned());
+            out.notes.push(
+                "cancelled during the bootstrap, before any chain ran: the chains' image is black"
+                    .to_owned(),
+            );
             return Ok(out);
         }
         if boot.starts.is_empty() {
@@ -536,6 +588,8 @@ where
             ));
             return Ok(out);
         }
+        // The chains that were resampled (fewer than requested if the time budget capped them).
+        let chains = boot.starts.len();
 
         // Chains, split into fixed jobs.
         let per_chain = |c: usize| -> u64 {
@@ -568,54 +622,66 @@ where
                     .collect()
             }
         };
-        if settings.chain_allocation != ChainAllocation::Joint {
-            let missed = (0..self.targets.len())
-                .filter(|&t| boot.target_b[t] > 0.0 && boot.target_chains[t] == 0)
-                .count();
-            if missed > 0 {
-                out.notes.push(format!(
-                    "{missed} target(s) with light found by the bootstrap got no chain ({} chains for more targets): their light is missing from the image",
-                    boot.starts.len()
-                ));
-            }
-        }
+        out.notes.extend(missed_targets_note(
+            &boot.target_b,
+            &boot.target_chains,
+            settings.chain_allocation,
+        ));
         let n_jobs = settings.jobs.min(chains);
         let mut skipped = 0usize;
         let shard = settings.shard;
-        let mut job_list: Vec<jobs::Job<'_, T, K, C, Sk>> = (0..n_jobs)
-            .filter(|&j| shard.owns(j, n_jobs) || C::COUPLES_CHAINS)
-            .map(|j| {
-                let (lo, hi) = (j * chains / n_jobs, (j + 1) * chains / n_jobs);
-                let mut job = jobs::Job::new((self.sink)());
-                job.muted = !shard.owns(j, n_jobs);
-                for c in lo..hi {
-                    let (target, index) = boot.starts[c];
-                    let slot = ChainSlot {
-                        chain: c,
-                        target,
-                        target_b: boot.target_b[target],
-                        large_step_mis: settings.large_step_mis,
-                    };
-                    let mut state = self.states.empty();
-                    bootstrap::draw(self.states, settings.seed, target, index, &mut state);
-                    let rng = ChainRng::seed_from_u64(chain_seed(settings.seed, c as u64));
-                    match Chain::new(
-                        &self.targets[target],
-                        (self.kernel)(slot),
-                        (self.controller)(slot),
-                        rng,
-                        state,
-                    ) {
-                        Ok(chain) => {
-                            job.chains.push((chain, per_chain(c)));
-                            job.weights.push(target_weight[target]);
-                        }
-                        Err(_) => skipped += 1,
+        let mut setup_stopped = None;
+        let mut job_list: Vec<jobs::Job<'_, T, K, C, Sk>> = Vec::with_capacity(n_jobs);
+        'jobs: for j in 0..n_jobs {
+            if !(shard.owns(j, n_jobs) || C::COUPLES_CHAINS) {
+                continue;
+            }
+            let (lo, hi) = (j * chains / n_jobs, (j + 1) * chains / n_jobs);
+            let mut job = jobs::Job::new((self.sink)());
+            job.muted = !shard.owns(j, n_jobs);
+            for c in lo..hi {
+                if c % SETUP_POLL == 0 && c > 0 {
+                    if cancel.load(Ordering::Relaxed) {
+                        setup_stopped = Some((c, "cancelled"));
+                    } else if deadline.is_some_and(|t| Instant::now() >= t) {
+                        setup_stopped = Some((c, "the time budget ran out"));
+                    }
+                    if setup_stopped.is_some() {
+                        job_list.push(job);
+                        break 'jobs;
                     }
                 }
-                job
-            })
-            .collect();
+                let (target, index) = boot.starts[c];
+                let slot = ChainSlot {
+                    chain: c,
+                    target,
+                    target_b: boot.target_b[target],
+                    large_step_mis: settings.large_step_mis,
+                };
+                let mut state = self.states.empty();
+                bootstrap::draw(self.states, settings.seed, target, index, &mut state);
+                let rng = ChainRng::seed_from_u64(chain_seed(settings.seed, c as u64));
+                match Chain::new(
+                    &self.targets[target],
+                    (self.kernel)(slot),
+                    (self.controller)(slot),
+                    rng,
+                    state,
+                ) {
+                    Ok(chain) => {
+                        job.chains.push((chain, per_chain(c)));
+                        job.weights.push(target_weight[target]);
+                    }
+                    Err(_) => skipped += 1,
+                }
+            }
+            job_list.push(job);
+        }
+        if let Some((started, why)) = setup_stopped {
+            out.notes.push(format!(
+                "{why} while the chains were being started: {started} of {chains} chains run"
+            ));
+        }
         if skipped > 0 {
             out.notes.push(format!(
                 "{skipped} chain starts re-evaluated to zero or non-finite density and were skipped (a target that is not a deterministic function of its state?)"
@@ -648,6 +714,16 @@ where
         } else {
             boot.b / out.mutations as f64
         };
+        if out.mutations == 0 {
+            out.notes.push(
+                if out.cancelled {
+                    "cancelled before the chains' first mutation: the chains' image is black"
+                } else {
+                    "no chain ran a mutation: the chains' image is black"
+                }
+                .to_owned(),
+            );
+        }
         Ok(out)
     }
 }

@@ -18,7 +18,7 @@ pub use connect::{connect, Connection, MisHeuristic};
 pub use render::{render_bdpt, render_bdpt_sampled, render_bdpt_shard, strategy_list, BdptOutput};
 pub use scene_api::SceneRef;
 pub use subpath::{camera_subpath, light_subpath, random_walk, Roulette, SpecularDensities};
-pub use vertex::{geometry_term, Vertex, VertexKind, MAX_VERTICES};
+pub use vertex::{geometry_term, Vertex, VertexKind, MAX_PATH_DEPTH, MAX_VERTICES};
 
 use glam::{Vec2, Vec3};
 

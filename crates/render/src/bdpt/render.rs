@@ -32,6 +32,9 @@ pub struct BdptOutput {
     pub dropped: u64,
     /// True if cancelled early.
     pub cancelled: bool,
+    /// Pixels without a camera sample (only light-tracing splats reach them): a cancel or
+    /// the time budget stopped the first pass before their row.
+    pub unsampled_pixels: u64,
     /// MIS-weighted image of each strategy `(s, t)` (only if requested); they sum to `image`.
     pub strategy_images: Vec<((u8, u8), Image)>,
     /// A shard's accumulators ([`render_bdpt_shard`]; `None` for the whole image).
@@ -120,8 +123,11 @@ struct Pass<'a> {
     seed: u64,
     sampler: SamplerKind,
     index: u32,
-    /// Rows not started by then are skipped (time budgets, after the first pass).
+    /// Rows not started by then are skipped (time budgets; in the first pass every row but
+    /// `free_row`).
     deadline: Option<Instant>,
+    /// The first row of the shard's first band: the first pass always renders it.
+    free_row: Option<usize>,
     progress: &'a dyn Progress,
     cancel: &'a AtomicBool,
 }
@@ -140,7 +146,8 @@ impl Band<'_> {
     fn render_with<S: PixelSampler>(&mut self, pass: &Pass<'_>, mut sampler: S) -> bool {
         let w = self.light.width();
         for y in self.rows.clone() {
-            if pass.deadline.is_some_and(|d| Instant::now() >= d) {
+            let first = pass.index == 0 && Some(y) == pass.free_row;
+            if !first && pass.deadline.is_some_and(|d| Instant::now() >= d) {
                 return false;
             }
             for x in 0..w {
@@ -220,8 +227,10 @@ impl Band<'_> {
 /// light subpath per camera sample). Both are unbiased for any per-pixel sample counts, so
 /// the image stays a correct average when a pass is cut short: `cancel` is checked before
 /// every pixel sample (a cancelled render returns within a fraction of a second at any
-/// `spp`), and under a time budget rows not started by the deadline are skipped after the
-/// first pass. Progress is reported in pixel samples.
+/// `spp`), and under a time budget rows not started by the deadline are skipped, in the
+/// first pass too (all but the image's first row), so a huge image stops on time with the
+/// pixels it did not reach counted in [`BdptOutput::unsampled_pixels`]. Progress is reported
+/// in pixel samples.
 #[allow(clippy::too_many_arguments)]
 pub fn render_bdpt(
     scene: SceneRef<'_>,
@@ -339,6 +348,8 @@ pub fn render_bdpt_shard(
     if let Some(n) = spp {
         progress.set_total(u64::from(n) * (w * h) as u64);
     }
+    let owned = |i: usize| shard.owns(i, BANDS);
+    let free_row = (0..BANDS).find(|&i| owned(i)).map(|i| i * h / BANDS);
     let mut done = 0u32;
     let mut stopped = false;
     while done < total_spp && !stopped {
@@ -349,11 +360,12 @@ pub fn render_bdpt_shard(
             seed,
             sampler,
             index: done,
-            deadline: time.filter(|_| done > 0).map(|t| start + t),
+            deadline: time.map(|t| start + t),
+            free_row,
             progress,
             cancel,
         };
-        if pass.deadline.is_some_and(|d| Instant::now() >= d) {
+        if done > 0 && pass.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
         let complete: Vec<bool> = bands
@@ -369,6 +381,19 @@ pub fn render_bdpt_shard(
     let cancelled = cancel.load(Ordering::Relaxed) && done < total_spp;
 
     let samples: u64 = bands.iter().map(|b| b.samples).sum();
+    // An incomplete first pass took at most one sample per pixel of the shard's bands: the
+    // others have none.
+    let unsampled_pixels = if done == 0 {
+        let shard_pixels: usize = bands
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| owned(i))
+            .map(|(_, b)| b.rows.len() * w)
+            .sum();
+        (shard_pixels as u64).saturating_sub(samples)
+    } else {
+        0
+    };
     let light_scale = if samples == 0 {
         0.0
     } else {
@@ -414,6 +439,7 @@ pub fn render_bdpt_shard(
         samples,
         dropped: bands.iter().map(|b| b.dropped).sum::<u64>() + overflowed,
         cancelled,
+        unsampled_pixels,
         strategy_images,
         component,
     }
@@ -500,5 +526,39 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_deadline_inside_the_first_pass_leaves_counted_unsampled_pixels() {
+        // The deadline has passed when the render starts: only the image's first row (which
+        // always runs) gets camera samples.
+        let scene = Scene::cornell_box(16, 16);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let params = BdptParams::default();
+        let no = AtomicBool::new(false);
+        let render = |spp, time| {
+            pool.install(|| {
+                render_bdpt(
+                    &scene,
+                    &params,
+                    spp,
+                    time,
+                    3,
+                    false,
+                    &mcmc_core::NoProgress,
+                    &no,
+                )
+            })
+        };
+        let out = render(None, Some(Duration::from_nanos(1)));
+        assert!(!out.cancelled);
+        assert_eq!((out.spp, out.samples), (0, 16));
+        assert_eq!(out.unsampled_pixels, 16 * 16 - 16);
+        // Control: a sample budget reaches every pixel.
+        let out = render(Some(1), None);
+        assert_eq!((out.samples, out.unsampled_pixels), (256, 0));
     }
 }

@@ -11,6 +11,10 @@ use crate::material::{Bsdf, TransportMode};
 /// Maximum number of vertices of a subpath (max depth 62 + 2 endpoints).
 pub const MAX_VERTICES: usize = 64;
 
+/// The deepest path BDPT and the Markov chain methods over it render (bounces): a larger
+/// `max_depth` is clamped to it.
+pub const MAX_PATH_DEPTH: u32 = MAX_VERTICES as u32 - 2;
+
 /// What a vertex is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VertexKind {

@@ -58,6 +58,9 @@ pub struct PtOutput {
     pub dropped_nonfinite: u64,
     /// True if `cancel` stopped the render early.
     pub cancelled: bool,
+    /// Pixels without any sample (black): a cancel or the time budget stopped the first pass
+    /// before their tile ([`PassesOutcome::unsampled_pixels`]).
+    pub unsampled_pixels: u64,
     /// The pixel-sample sums the image was made from (a shard's part of a render).
     pub film: Film,
 }
@@ -75,8 +78,9 @@ pub struct PtOutput {
 ///   (fewer in the last): every pixel soon has samples, and a pass never adds more than the
 ///   pixels already had, so tiles a cancelled pass did not reach have at least half the
 ///   samples of the others.
-/// * `Time(d)`: passes of one sample per pixel until `d` has elapsed; after the first pass,
-///   tiles not started before the deadline are skipped.
+/// * `Time(d)`: passes of one sample per pixel until `d` has elapsed; tiles not started
+///   before the deadline are skipped, in the first pass too (except its first tile): a huge
+///   image stops on time and reports its unsampled pixels ([`PtOutput::unsampled_pixels`]).
 /// * `cancel` is checked before every sample index of every tile (one sample of each of the
 ///   tile's pixels, milliseconds of work), so a cancelled render returns promptly at any
 ///   sample count, with every pixel normalised by its own samples: the partial image is an
@@ -158,7 +162,7 @@ where
         }
         (tile, true)
     };
-    let cancelled = render_passes(
+    let outcome = render_passes(
         settings.width,
         settings.height,
         settings.budget,
@@ -177,23 +181,36 @@ where
         image,
         samples: film.samples,
         dropped_nonfinite: film.nonfinite + overflowed,
-        cancelled,
+        cancelled: outcome.cancelled,
+        unsampled_pixels: outcome.unsampled_pixels,
         film,
     }
 }
 
+/// How [`render_passes`] ended.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PassesOutcome {
+    /// True if `cancel` stopped the render.
+    pub cancelled: bool,
+    /// Pixels of this shard's tiles that never completed a pass: they have no sample
+    /// (black). Nonzero only if a cancel or the time budget stopped the first pass.
+    pub unsampled_pixels: u64,
+}
+
 /// The tiling, threading, pass, budget, progress and cancellation machinery of the PT driver,
-/// for any per-tile work: returns true if the render was cancelled.
+/// for any per-tile work.
 ///
 /// `render_tile(rect, first, count)` renders sample indices `first..first + count` of the
 /// pixels of `rect` (a [`TILE_SIZE`] tile; tiles run in parallel on the current rayon pool)
 /// and returns its result and whether it completed (false: it saw `cancel`).
 /// `end_pass(first, count, results)` receives every tile's result of a pass, in tile order
-/// (`None` for a tile a [`Budget::Time`] render skipped because the deadline had passed), so
-/// merging in that order gives the same bits for any thread count. Passes are as in
-/// [`render_pt`]: doubling up to a sixteenth of a sample budget, or one sample per pixel until
-/// the time budget is spent (the first pass always runs). Progress is in pixel samples; the
-/// tile reports its own progress.
+/// (`None` for another shard's tile, or a tile not started because `cancel` was set or a
+/// [`Budget::Time`] deadline had passed), so merging in that order gives the same bits for
+/// any thread count. Passes are as in [`render_pt`]: doubling up to a sixteenth of a sample
+/// budget, or one sample per pixel until the time budget is spent. The deadline is checked
+/// before every tile, in the first pass too (whose first tile always runs), so a huge image
+/// stops on time with part of it unsampled ([`PassesOutcome::unsampled_pixels`]). Progress
+/// is in pixel samples; the tile reports its own progress.
 #[allow(clippy::too_many_arguments)]
 pub fn render_passes<R, F, M>(
     width: u32,
@@ -204,7 +221,7 @@ pub fn render_passes<R, F, M>(
     cancel: &AtomicBool,
     render_tile: F,
     mut end_pass: M,
-) -> bool
+) -> PassesOutcome
 where
     R: Send,
     F: Fn(PixelRect, u32, u32) -> (R, bool) + Sync,
@@ -222,16 +239,33 @@ where
         .filter(|(_, mine)| *mine)
         .map(|(rect, _)| rect.area() as u64)
         .sum::<u64>();
+    // The first pass always renders this shard's first tile.
+    let first_tile = work.iter().position(|(_, mine)| *mine);
     let mut cancelled = false;
+    // Per tile: has it completed a pass (so every pixel has a sample)?
+    let mut sampled = vec![false; work.len()];
+    // Records the tiles a pass completed; true if one of this shard's tiles did not complete.
+    let mut record = |done: &[Option<(R, bool)>]| -> bool {
+        let mut incomplete = false;
+        for ((s, d), (_, mine)) in sampled.iter_mut().zip(done).zip(&work) {
+            let complete = matches!(d, Some((_, true)));
+            *s |= complete;
+            incomplete |= *mine && !complete;
+        }
+        incomplete
+    };
     match budget {
         Budget::SamplesPerPixel(spp) => {
             progress.set_total(pixels * u64::from(spp));
             for (first, count) in passes(spp) {
                 let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
-                    .map(|&(rect, mine)| mine.then(|| render_tile(rect, first, count)))
+                    .map(|&(rect, mine)| {
+                        (mine && !cancel.load(Ordering::Relaxed))
+                            .then(|| render_tile(rect, first, count))
+                    })
                     .collect();
-                cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
+                cancelled |= record(&done);
                 end_pass(first, count, done);
                 if cancelled {
                     break;
@@ -244,11 +278,15 @@ where
             loop {
                 let done: Vec<Option<(R, bool)>> = work
                     .par_iter()
-                    .map(|&(rect, mine)| {
-                        let late = pass > 0 && Instant::now() >= deadline;
-                        (mine && !late).then(|| render_tile(rect, pass, 1))
+                    .enumerate()
+                    .map(|(i, &(rect, mine))| {
+                        let free = pass == 0 && Some(i) == first_tile;
+                        let late = !free && Instant::now() >= deadline;
+                        (mine && !late && !cancel.load(Ordering::Relaxed))
+                            .then(|| render_tile(rect, pass, 1))
                     })
                     .collect();
+                record(&done);
                 cancelled |= done.iter().flatten().any(|(_, complete)| !complete);
                 end_pass(pass, 1, done);
                 pass += 1;
@@ -265,7 +303,16 @@ where
             }
         }
     }
-    cancelled
+    let unsampled_pixels = work
+        .iter()
+        .zip(&sampled)
+        .filter(|((_, mine), &s)| *mine && !s)
+        .map(|((rect, _), _)| rect.area() as u64)
+        .sum();
+    PassesOutcome {
+        cancelled,
+        unsampled_pixels,
+    }
 }
 
 /// The passes `(first sample index, samples per pixel)` of a render of `spp` samples per
@@ -334,5 +381,28 @@ mod tests {
         assert_eq!(next, 1_000_000);
         assert_eq!(passes(16).count(), 16);
         assert_eq!(passes(1).collect::<Vec<_>>(), [(0, 1)]);
+    }
+
+    #[test]
+    fn a_deadline_inside_the_first_pass_leaves_counted_unsampled_pixels() {
+        // 64 x 32: eight tiles. The deadline has passed when the render starts: only the
+        // first tile (which always runs) is sampled.
+        let scene = Scene::cornell_box(64, 32);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let mut s = settings(1);
+        (s.width, s.height) = (64, 32);
+        s.budget = Budget::Time(std::time::Duration::from_nanos(1));
+        let no = AtomicBool::new(false);
+        let out = pool.install(|| render_pt(&scene, &s, &mcmc_core::NoProgress, &no));
+        assert!(!out.cancelled);
+        assert_eq!(out.samples, 256);
+        assert_eq!(out.unsampled_pixels, 64 * 32 - 256);
+        // Control: a sample budget reaches every pixel.
+        s.budget = Budget::SamplesPerPixel(1);
+        let out = pool.install(|| render_pt(&scene, &s, &mcmc_core::NoProgress, &no));
+        assert_eq!((out.samples, out.unsampled_pixels), (64 * 32, 0));
     }
 }

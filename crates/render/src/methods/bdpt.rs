@@ -2,7 +2,8 @@
 //! the reference renderer.
 
 use super::{
-    bdpt_params, emitter_notes, IntegratorKind, Method, RenderOutput, RenderSettings, Run,
+    bdpt_params, depth_note, emitter_notes, unsampled_note, IntegratorKind, Method, RenderOutput,
+    RenderSettings, Run, Unsampled,
 };
 use crate::bdpt::{self, BdptParams, Roulette};
 use crate::budget::Budget;
@@ -73,6 +74,15 @@ impl Method for BdptSettings {
             run.progress,
             run.cancel,
         );
+        let mut notes = emitter_notes(scene);
+        notes.extend(depth_note(common));
+        let pixels = u64::from(common.width) * u64::from(common.height);
+        notes.extend(unsampled_note(
+            out.unsampled_pixels,
+            pixels,
+            out.cancelled,
+            Unsampled::CameraSamples,
+        ));
         let partial = out.component.map(|c| Partial {
             width: out.image.width,
             height: out.image.height,
@@ -83,7 +93,8 @@ impl Method for BdptSettings {
             samples: out.samples,
             dropped_nonfinite: out.dropped,
             cancelled: out.cancelled,
-            notes: emitter_notes(scene),
+            unsampled_pixels: out.unsampled_pixels,
+            notes,
             strategy_images: out.strategy_images,
             ..RenderOutput::new(out.image, run.start.elapsed())
         })

@@ -10,8 +10,8 @@ use mcmc_core::{Progress, Target};
 
 use super::mala::mala_note;
 use super::{
-    bdpt_params, emitter_notes, mcmc_output, ChainSettings, IntegratorKind, Method, RenderOutput,
-    RenderSettings, Run,
+    bdpt_params, depth_note, emitter_notes, mcmc_output, ChainSettings, IntegratorKind, Method,
+    RenderOutput, RenderSettings, Run,
 };
 use crate::bdpt::Roulette;
 use crate::error::RenderError;
@@ -85,6 +85,7 @@ impl Method for DrmltSettings {
         let params = bdpt_params(common, self.roulette);
         let (w, h) = (common.width, common.height);
         let mut notes = emitter_notes(scene);
+        notes.extend(depth_note(common));
         let mlt_settings = self
             .chain
             .mlt_settings(common, PATH_STREAMS, true, run.shard);

@@ -2,7 +2,9 @@
 //! explored by rank-1 lattices, prefixes re-traced and reconnected to the static suffix
 //! ([`crate::integrator::lqmc`]).
 
-use super::{IntegratorKind, LqmcStats, Method, RenderOutput, RenderSettings, Run};
+use super::{
+    unsampled_note, IntegratorKind, LqmcStats, Method, RenderOutput, RenderSettings, Run, Unsampled,
+};
 use crate::error::RenderError;
 use crate::integrator::lqmc::{render_lqmc, LqmcParams};
 use crate::integrator::pt::ROULETTE_DEPTH;
@@ -72,6 +74,12 @@ impl Method for LqmcSettings {
         };
         let mut notes = scene.notes.clone();
         notes.push(format!("lqmc: {stats}"));
+        notes.extend(unsampled_note(
+            out.unsampled_pixels,
+            u64::from(common.width) * u64::from(common.height),
+            out.cancelled,
+            Unsampled::SeedPaths,
+        ));
         let partial = out.component.map(|c| Partial {
             width: out.image.width,
             height: out.image.height,
@@ -82,6 +90,7 @@ impl Method for LqmcSettings {
             samples: out.seeds,
             dropped_nonfinite: out.dropped_nonfinite,
             cancelled: out.cancelled,
+            unsampled_pixels: out.unsampled_pixels,
             notes,
             lqmc: Some(stats),
             ..RenderOutput::new(out.image, run.start.elapsed())

@@ -5,8 +5,8 @@
 use mcmc_core::langevin::LangevinParams;
 
 use super::{
-    bdpt_params, emitter_notes, mcmc_output, ChainSettings, IntegratorKind, Method, RenderOutput,
-    RenderSettings, Run,
+    bdpt_params, depth_note, emitter_notes, mcmc_output, ChainSettings, IntegratorKind, Method,
+    RenderOutput, RenderSettings, Run,
 };
 use crate::bdpt::BdptParams;
 use crate::error::RenderError;
@@ -119,6 +119,7 @@ impl Method for MalaSettings {
     ) -> Result<RenderOutput, RenderError> {
         let params = bdpt_params(common, BdptParams::default().roulette);
         let mut notes = emitter_notes(scene);
+        notes.extend(depth_note(common));
         let mlt_settings = self
             .chain
             .mlt_settings(common, PATH_STREAMS, false, run.shard);

@@ -5,10 +5,11 @@ use std::time::Instant;
 
 use super::pssmlt::push_estimator_notes;
 use super::{
-    bdpt_params, emitter_notes, mcmc_output, remaining, ChainSettings, IntegratorKind, Method,
-    PssKernel, RenderOutput, RenderSettings, Run,
+    bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, ChainSettings, IntegratorKind,
+    Method, PssKernel, RenderOutput, RenderSettings, Run,
 };
 use crate::bdpt::{BdptParams, Roulette};
+use crate::budget::Budget;
 use crate::error::RenderError;
 use crate::mlt::{self, MltDriver, MltEstimator, MmltTarget, PATH_STREAMS};
 use crate::scene::Scene;
@@ -67,6 +68,11 @@ impl MmltSettings {
 /// Largest accepted `bdpt_normalization`.
 pub const MAX_BDPT_NORMALIZATION: u64 = 100_000_000;
 
+/// Under a time budget, the share of it the `bdpt_normalization` samples may take (the
+/// bootstrap's share, `mcmc_core::render_loop::LoopSettings::bootstrap_time_share`); they
+/// stop early, with a note, when it is spent.
+pub const NORMALIZATION_TIME_SHARE: f64 = 0.25;
+
 impl Method for MmltSettings {
     fn kind(&self) -> IntegratorKind {
         IntegratorKind::Mmlt
@@ -92,6 +98,7 @@ impl Method for MmltSettings {
         let params: BdptParams = bdpt_params(common, self.roulette);
         let (w, h) = (common.width, common.height);
         let mut notes = emitter_notes(scene);
+        notes.extend(depth_note(common));
         let kernel = PssKernel::new(self.chain.small_step, &self.raster, w, h);
         let mlt_settings = self
             .chain
@@ -105,26 +112,45 @@ impl Method for MmltSettings {
         let normalization = (self.bdpt_normalization > 0)
             .then(|| {
                 let t0 = Instant::now();
-                let nb = mlt::mmlt_depth_normalization(
+                // Under a time budget the normalisation gets the bootstrap's share of it.
+                let deadline = match common.budget {
+                    Budget::Time(t) => Some(run.start + t.mul_f64(NORMALIZATION_TIME_SHARE)),
+                    Budget::SamplesPerPixel(_) => None,
+                };
+                let nb = mlt::mmlt_depth_normalization_until(
                     scene,
                     params,
                     w,
                     h,
                     self.bdpt_normalization,
                     common.seed,
+                    deadline,
                     run.cancel,
-                );
-                if let Some(nb) = &nb {
-                    notes.push(format!(
-                        "MMLT depth normalisation from {} all-strategy BDPT samples ({:.2} s): b = {:.6}",
+                )?;
+                let stopped = if nb.samples < self.bdpt_normalization {
+                    format!(
+                        " of {} (stopped at {:.0} % of the time budget)",
                         self.bdpt_normalization,
-                        t0.elapsed().as_secs_f64(),
-                        nb.iter().sum::<f64>()
-                    ));
-                }
-                nb.map(|nb| (nb, t0.elapsed()))
+                        NORMALIZATION_TIME_SHARE * 100.0
+                    )
+                } else {
+                    String::new()
+                };
+                notes.push(format!(
+                    "MMLT depth normalisation from {}{stopped} all-strategy BDPT samples ({:.2} s): b = {:.6}",
+                    nb.samples,
+                    t0.elapsed().as_secs_f64(),
+                    nb.b.iter().sum::<f64>()
+                ));
+                Some((nb.b, t0.elapsed()))
             })
             .flatten();
+        if self.bdpt_normalization > 0 && normalization.is_none() {
+            notes.push(
+                "cancelled during the MMLT depth normalisation: the chains use the bootstrap's b"
+                    .to_owned(),
+            );
+        }
         let targets = MmltTarget::all_depths(scene, params, w, h);
         let make_kernel = |p: f64| kernel.with_large_step(p);
         let driver = MltDriver::new(&targets, &mlt_settings).estimator(estimator);

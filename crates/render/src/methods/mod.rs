@@ -36,6 +36,7 @@ pub mod direct_pass;
 pub mod drmlt;
 pub mod lqmc;
 pub mod mala;
+pub mod memory;
 pub mod mmlt;
 mod output;
 pub mod pathmlt;
@@ -50,7 +51,8 @@ pub use lqmc::LqmcSettings;
 pub use mala::MalaSettings;
 pub use mmlt::MmltSettings;
 pub use output::{
-    mcmc_notes, mcmc_output, DirectPassStats, LqmcStats, McmcStats, PhaseTimes, RenderOutput,
+    mcmc_notes, mcmc_output, unsampled_note, DirectPassStats, LqmcStats, McmcStats, PhaseTimes,
+    RenderOutput, Unsampled,
 };
 pub use pathmlt::PathMltSettings;
 pub use pssmlt::PssmltSettings;
@@ -124,6 +126,19 @@ pub fn emitter_notes(scene: &Scene) -> Vec<String> {
         notes.push("the scene has no light (and no environment): the image is black".to_owned());
     }
     notes
+}
+
+/// A note if `common.max_depth` is deeper than BDPT's paths go ([`crate::bdpt::MAX_PATH_DEPTH`]):
+/// BDPT and the Markov chain methods over it render depths up to that limit only.
+#[must_use]
+pub fn depth_note(common: &RenderSettings) -> Option<String> {
+    (common.max_depth > crate::bdpt::MAX_PATH_DEPTH).then(|| {
+        format!(
+            "--max-depth {}: paths of more than {} bounces are not rendered (the bidirectional path sampler's limit)",
+            common.max_depth,
+            crate::bdpt::MAX_PATH_DEPTH
+        )
+    })
 }
 
 /// BDPT's parameters (shared by BDPT and the MCMC path samplers) at `common`'s depth.

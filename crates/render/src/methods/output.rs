@@ -22,6 +22,10 @@ pub struct RenderOutput {
     pub dropped_nonfinite: u64,
     /// True if the render stopped early because `cancel` was set.
     pub cancelled: bool,
+    /// Pixels the render never reached (a cancel or the time budget stopped its first pass
+    /// before them): black, or for BDPT lit only by light tracing. 0 for a complete image
+    /// and for the Markov chain methods, whose image is a global estimate.
+    pub unsampled_pixels: u64,
     /// Wall-clock time spent.
     pub elapsed: Duration,
     /// Notes for people (e.g. why an image is black). Programs read [`RenderOutput::mcmc`]
@@ -55,6 +59,7 @@ impl RenderOutput {
             samples: 0,
             dropped_nonfinite: 0,
             cancelled: false,
+            unsampled_pixels: 0,
             elapsed,
             notes: Vec::new(),
             strategy_images: Vec::new(),
@@ -65,6 +70,42 @@ impl RenderOutput {
             partial: None,
         }
     }
+}
+
+/// What pixels a render did not reach lack ([`unsampled_note`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unsampled {
+    /// No sample at all: the pixels are black.
+    Black,
+    /// No camera sample: only BDPT's light-tracing splats reach them.
+    CameraSamples,
+    /// No seed path: only lattice members of neighbouring seeds reach them (LQMC).
+    SeedPaths,
+}
+
+/// The note for an image with `unsampled` of its `pixels` not reached: how much of the image
+/// is missing and why (a cancel or the time budget stopping the first pass), so that an
+/// incomplete image is never presented as complete. `None` if every pixel was reached.
+#[must_use]
+pub fn unsampled_note(
+    unsampled: u64,
+    pixels: u64,
+    cancelled: bool,
+    lacking: Unsampled,
+) -> Option<String> {
+    if unsampled == 0 || pixels == 0 {
+        return None;
+    }
+    let percent = 100.0 * unsampled as f64 / pixels as f64;
+    Some(format!(
+        "the image is incomplete: {percent:.1} % of the pixels ({unsampled} of {pixels}) have {}, because {} stopped the first pass before them",
+        match lacking {
+            Unsampled::Black => "no sample (black)",
+            Unsampled::CameraSamples => "no camera sample (only light-tracing contributions)",
+            Unsampled::SeedPaths => "no seed path (only neighbouring lattice members)",
+        },
+        if cancelled { "the cancel" } else { "the time budget" }
+    ))
 }
 
 /// Wall-clock time of each phase of a Markov chain render.

@@ -3,9 +3,11 @@
 //! vector with Kelemen's small steps and independent large steps.
 
 use super::direct_pass::{self, DirectRun};
+use std::sync::atomic::Ordering;
+
 use super::{
-    bdpt_params, emitter_notes, mcmc_output, remaining, ChainSettings, IntegratorKind, Method,
-    PssKernel, RenderOutput, RenderSettings, Run,
+    bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, unsampled_note, ChainSettings,
+    IntegratorKind, Method, PssKernel, RenderOutput, RenderSettings, Run, Unsampled,
 };
 use crate::bdpt::{BdptParams, Roulette};
 use crate::error::RenderError;
@@ -139,6 +141,7 @@ impl Method for PssmltSettings {
     ) -> Result<RenderOutput, RenderError> {
         let params = bdpt_params(common, self.roulette);
         let mut notes = emitter_notes(scene);
+        notes.extend(depth_note(common));
         let kernel = PssKernel::new(
             self.chain.small_step,
             &self.raster,
@@ -148,7 +151,7 @@ impl Method for PssmltSettings {
         // The separate direct-lighting pass, rendered first; under a time budget the chains
         // get what is left.
         let pass_depth = self.pass_depth();
-        let direct: Option<DirectRun> = direct_pass::run(
+        let mut direct: Option<DirectRun> = direct_pass::run(
             scene,
             &params,
             common,
@@ -158,6 +161,20 @@ impl Method for PssmltSettings {
             run,
             &mut notes,
         );
+        let spent = direct.as_ref().map(|d| d.elapsed);
+        // A pass whose share of a time budget did not reach every pixel (a huge image) would
+        // leave those pixels without their direct light: drop it, the chains take every depth.
+        if let Some(d) = direct
+            .as_ref()
+            .filter(|d| d.pass.unsampled_pixels > 0 && !d.pass.cancelled)
+        {
+            let pixels = u64::from(common.width) * u64::from(common.height);
+            notes.push(format!(
+                "the direct-lighting pass reached only {:.1} % of the pixels in its share of the time budget: it is dropped and the chains render every depth",
+                100.0 * (pixels - d.pass.unsampled_pixels.min(pixels)) as f64 / pixels as f64
+            ));
+            direct = None;
+        }
         let min_depth = if direct.is_some() {
             self.direct.chain_min_depth(common.max_depth, pass_depth)
         } else {
@@ -166,8 +183,8 @@ impl Method for PssmltSettings {
         let mut mlt_settings = self
             .chain
             .mlt_settings(common, PATH_STREAMS, false, run.shard);
-        if let Some(d) = &direct {
-            mlt_settings.budget = remaining(mlt_settings.budget, d.elapsed);
+        if let Some(spent) = spent {
+            mlt_settings.budget = remaining(mlt_settings.budget, spent);
         }
         let estimator = MltEstimator {
             large_step_mis: self.large_step_mis,
@@ -184,11 +201,28 @@ impl Method for PssmltSettings {
         let chains_ran = out.mutations > 0;
         let mut output = mcmc_output(out, notes, run.start.elapsed());
         if let Some(d) = direct {
-            if !chains_ran {
+            let depths = format!("path depths 0-{pass_depth}");
+            if output.mcmc.as_ref().is_some_and(|m| m.found_nothing) {
                 output.notes.push(format!(
-                    "cancelled before the chains ran: the image holds only the direct-lighting pass (path depths 0-{pass_depth})"
+                    "the bootstrap found no light on deeper paths: the direct-lighting pass ({depths}) is the whole image"
+                ));
+            } else if !chains_ran {
+                output.notes.push(format!(
+                    "{} before the chains ran: the image holds only the direct-lighting pass ({depths}); the light of deeper paths is missing",
+                    if output.cancelled || run.cancel.load(Ordering::Relaxed) {
+                        "cancelled"
+                    } else {
+                        "stopped"
+                    }
                 ));
             }
+            output.notes.extend(unsampled_note(
+                d.pass.unsampled_pixels,
+                u64::from(common.width) * u64::from(common.height),
+                d.pass.cancelled,
+                Unsampled::CameraSamples,
+            ));
+            output.unsampled_pixels = d.pass.unsampled_pixels;
             direct::add_into(&mut output.image, &d.pass.image);
             if let (Some(partial), Some(c)) = (output.partial.as_mut(), d.pass.component) {
                 partial.components.push(c);

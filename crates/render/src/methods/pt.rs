@@ -3,7 +3,10 @@
 
 use lqmc::Scrambling;
 
-use super::{emitter_notes, IntegratorKind, Method, RenderOutput, RenderSettings, Run};
+use super::{
+    emitter_notes, unsampled_note, IntegratorKind, Method, RenderOutput, RenderSettings, Run,
+    Unsampled,
+};
 use crate::error::RenderError;
 use crate::integrator::pt::ROULETTE_DEPTH;
 use crate::integrator::pt_driver::{self, PtDriverSettings, PtOutput};
@@ -97,6 +100,14 @@ fn driver_settings(
 
 /// A render output from the PT driver's.
 fn output(scene: &Scene, out: PtOutput, run: &Run<'_>) -> RenderOutput {
+    let mut notes = emitter_notes(scene);
+    let pixels = (out.image.width * out.image.height) as u64;
+    notes.extend(unsampled_note(
+        out.unsampled_pixels,
+        pixels,
+        out.cancelled,
+        Unsampled::Black,
+    ));
     let partial = (!run.shard.is_whole()).then(|| {
         let (sum, weight) = out.film.sums();
         Partial {
@@ -115,7 +126,8 @@ fn output(scene: &Scene, out: PtOutput, run: &Run<'_>) -> RenderOutput {
         samples: out.samples,
         dropped_nonfinite: out.dropped_nonfinite,
         cancelled: out.cancelled,
-        notes: emitter_notes(scene),
+        unsampled_pixels: out.unsampled_pixels,
+        notes,
         ..RenderOutput::new(out.image, run.start.elapsed())
     }
 }

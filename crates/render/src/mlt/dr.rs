@@ -90,7 +90,7 @@ const PER_BOUNCE: usize = 4;
 /// all, unlike PSSMLT's lazy Kelemen step), so the layout is no larger than what is read.
 #[must_use]
 pub fn dr_layout(max_depth: u32) -> PairLayout {
-    let d = max_depth.min(62) as usize;
+    let d = max_depth.min(crate::bdpt::MAX_PATH_DEPTH) as usize;
     let even = |n: usize| n + n % 2;
     let camera = even(5 + PER_BOUNCE * (d + 1));
     let light = even(5 + PER_BOUNCE * (d + 1));

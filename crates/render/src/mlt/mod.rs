@@ -13,7 +13,8 @@ mod strata;
 
 pub use driver::{GivenStates, MltDriver, PrimarySamples};
 pub use path_sampler::{
-    mmlt_depth_normalization, MmltTarget, PathPayload, PssmltTarget, PATH_STREAMS,
+    mmlt_depth_normalization, mmlt_depth_normalization_until, DepthNormalization, MmltTarget,
+    PathPayload, PssmltTarget, PATH_STREAMS,
 };
 pub use run::{
     LargeStepMode, MakeKernel, MltBudget, MltEstimator, MltOutput, MltSettings, PerChain,

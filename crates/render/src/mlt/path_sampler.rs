@@ -1,6 +1,9 @@
 //! The path samplers MCMC runs on: BDPT as a function of primary samples, exposed as
 //! `mcmc_core::Target`s over `pss::PssState` (PSSMLT: all strategies; MMLT: one strategy).
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
 use glam::Vec2;
 use mcmc_core::Target;
 use pss::PssState;
@@ -130,9 +133,11 @@ pub struct MmltTarget<'s> {
 }
 
 impl<'s> MmltTarget<'s> {
-    /// The targets for every depth `0..=params.max_depth`.
+    /// The targets for every depth `0..=params.max_depth`, at most
+    /// [`bdpt::MAX_PATH_DEPTH`] (BDPT's deepest path; a deeper target would sample that depth
+    /// again and count its light twice).
     pub fn all_depths(scene: &'s Scene, params: BdptParams, width: u32, height: u32) -> Vec<Self> {
-        (0..=params.max_depth)
+        (0..=params.max_depth.min(bdpt::MAX_PATH_DEPTH))
             .map(|depth| Self {
                 scene,
                 params,
@@ -201,24 +206,64 @@ pub fn mmlt_depth_normalization(
     height: u32,
     samples: u64,
     seed: u64,
-    cancel: &std::sync::atomic::AtomicBool,
+    cancel: &AtomicBool,
 ) -> Option<Vec<f64>> {
+    mmlt_depth_normalization_until(scene, params, width, height, samples, seed, None, cancel)
+        .map(|n| n.b)
+}
+
+/// One block's per-depth luminance sums and its sample count.
+type BlockSums = (Vec<f64>, u64);
+
+/// What [`mmlt_depth_normalization_until`] estimated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthNormalization {
+    /// The estimate of each depth's integral `b_d`.
+    pub b: Vec<f64>,
+    /// All-strategy samples it rests on (all that were asked for unless the deadline
+    /// stopped it).
+    pub samples: u64,
+}
+
+/// [`mmlt_depth_normalization`] that also stops at `deadline`: blocks of samples not started
+/// by then are skipped (the first block always runs) and `b_d` is the mean over the blocks
+/// that ran, still unbiased (which blocks run depends on the clock, not on their values).
+/// Without a deadline the result is [`mmlt_depth_normalization`]'s, bit for bit. Returns
+/// `None` if cancelled.
+#[allow(clippy::too_many_arguments)]
+#[must_use]
+pub fn mmlt_depth_normalization_until(
+    scene: &Scene,
+    params: BdptParams,
+    width: u32,
+    height: u32,
+    samples: u64,
+    seed: u64,
+    deadline: Option<Instant>,
+    cancel: &AtomicBool,
+) -> Option<DepthNormalization> {
     use rayon::prelude::*;
-    let depths = params.max_depth.min(bdpt::MAX_VERTICES as u32 - 2) as usize + 1;
+    let depths = params.max_depth.min(bdpt::MAX_PATH_DEPTH) as usize + 1;
     let size = Vec2::new(width as f32, height as f32);
     let key_seed = mcmc_core::seed::mix64(seed ^ 0xbd97_a11d_e97b_0001);
     let blocks = samples.div_ceil(NORMALIZATION_BLOCK);
-    let sums: Vec<Option<Vec<f64>>> = (0..blocks)
+    // Per block: its sums and sample count; `Some(None)` for a block the deadline skipped,
+    // `None` if cancelled.
+    let sums: Vec<Option<Option<BlockSums>>> = (0..blocks)
         .into_par_iter()
         .map_init(
             || (PssState::new(PATH_STREAMS, 0), BdptScratch::default()),
             |(state, scratch), block| {
-                if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+                if cancel.load(Ordering::Relaxed) {
                     return None;
+                }
+                if block > 0 && deadline.is_some_and(|t| Instant::now() >= t) {
+                    return Some(None);
                 }
                 let mut sums = vec![0.0f64; depths];
                 let lo = block * NORMALIZATION_BLOCK;
-                for i in lo..(lo + NORMALIZATION_BLOCK).min(samples) {
+                let hi = (lo + NORMALIZATION_BLOCK).min(samples);
+                for i in lo..hi {
                     state.reset(PATH_STREAMS, mcmc_core::seed::chain_seed(key_seed, i));
                     state.begin();
                     Sampler::start_stream(state, Stream::Camera);
@@ -231,16 +276,56 @@ pub fn mmlt_depth_normalization(
                         }
                     });
                 }
-                Some(sums)
+                Some(Some((sums, hi - lo)))
             },
         )
         .collect();
     let mut total = vec![0.0f64; depths];
+    let mut taken = 0u64;
     for block in sums {
-        for (t, s) in total.iter_mut().zip(block?) {
-            *t += s;
+        if let Some((block, n)) = block? {
+            for (t, s) in total.iter_mut().zip(block) {
+                *t += s;
+            }
+            taken += n;
         }
     }
-    let n = samples.max(1) as f64;
-    Some(total.into_iter().map(|s| s / n).collect())
+    let n = taken.max(1) as f64;
+    Some(DepthNormalization {
+        b: total.into_iter().map(|s| s / n).collect(),
+        samples: taken,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_depth_normalization_stops_at_its_deadline() {
+        let scene = Scene::cornell_box(8, 8);
+        let params = BdptParams::default();
+        let no = AtomicBool::new(false);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let until = |samples, deadline| {
+            pool.install(|| {
+                mmlt_depth_normalization_until(&scene, params, 8, 8, samples, 1, deadline, &no)
+            })
+            .unwrap()
+        };
+        // A deadline that has passed: only the first block runs, and its mean is the estimate.
+        let stopped = until(100_000, Some(Instant::now()));
+        assert_eq!(stopped.samples, NORMALIZATION_BLOCK);
+        let first_block = until(NORMALIZATION_BLOCK, None);
+        assert_eq!(stopped, first_block);
+        assert!(stopped.b.iter().sum::<f64>() > 0.0);
+        // Control: without a deadline every sample is taken, bit for bit as before.
+        let all = until(3 * NORMALIZATION_BLOCK, None);
+        assert_eq!(all.samples, 3 * NORMALIZATION_BLOCK);
+        let plain = mmlt_depth_normalization(&scene, params, 8, 8, 3 * NORMALIZATION_BLOCK, 1, &no);
+        assert_eq!(Some(all.b), plain);
+    }
 }

@@ -5,7 +5,7 @@ use mcmc_core::render_loop::IndependentStates;
 use pss::{FreshPss, PssState};
 
 use super::path_sampler::MmltTarget;
-use crate::bdpt::MAX_VERTICES;
+use crate::bdpt::MAX_PATH_DEPTH;
 use crate::sampler::Stream;
 
 /// Independent states for MMLT's bootstrap, stratified over the strategy choice.
@@ -56,15 +56,8 @@ impl MmltStrata {
         Self {
             fresh: FreshPss::new(streams).unwrap_or_else(|_| unreachable!("clamped to 1..=4")),
             strategy_coordinate: Stream::Connection.index().min(streams - 1),
-            strategies: (0..=max_depth)
-                .map(|d| {
-                    let d = (d as usize).min(MAX_VERTICES - 2);
-                    if d == 0 {
-                        1
-                    } else {
-                        d as u64 + 2
-                    }
-                })
+            strategies: (0..=max_depth.min(MAX_PATH_DEPTH))
+                .map(|d| if d == 0 { 1 } else { u64::from(d) + 2 })
                 .collect(),
         }
     }

@@ -157,6 +157,9 @@ pub struct LqmcOutput {
     pub dropped_nonfinite: u64,
     /// True if `cancel` stopped the render.
     pub cancelled: bool,
+    /// Pixels whose tile a cancel or the time budget stopped before its first seed path
+    /// (only lattice members of neighbouring tiles' seeds land there).
+    pub unsampled_pixels: u64,
 }
 
 /// Splat sums of one work unit, sparse: the splats that land in its pixels plus the margin
@@ -285,7 +288,7 @@ pub fn render_lqmc(
     let mut totals = ExploreStats::default();
     let mut too_large = 0u64;
     let shard = settings.shard;
-    let cancelled = render_passes(
+    let outcome = render_passes(
         settings.width,
         settings.height,
         settings.budget,
@@ -330,7 +333,8 @@ pub fn render_lqmc(
         members: totals.members,
         rejected: totals.rejected,
         dropped_nonfinite: dropped,
-        cancelled,
+        cancelled: outcome.cancelled,
+        unsampled_pixels: outcome.unsampled_pixels,
     }
 }
 
