@@ -132,9 +132,38 @@ pub fn luminance(rgb: [f32; 3]) -> f32 {
     0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
 }
 
+/// Adds `other` into `image` pixel by pixel (same size: e.g. PSSMLT's direct pass plus its chains).
+///
+/// # Panics
+/// If the sizes differ (both are rendered at the camera's size by construction).
+pub fn add_into(image: &mut Image, other: &Image) {
+    assert_eq!(
+        (image.width, image.height),
+        (other.width, other.height),
+        "images added must have the same size"
+    );
+    for (a, b) in image.pixels.iter_mut().zip(&other.pixels) {
+        for c in 0..3 {
+            a[c] += b[c];
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn add_into_sums_pixels() {
+        let mut a = Image::new(2, 1);
+        a.set(0, 0, [1.0, 2.0, 3.0]);
+        let mut b = Image::new(2, 1);
+        b.set(0, 0, [0.5, 0.5, 0.5]);
+        b.set(1, 0, [1.0, 0.0, 0.0]);
+        add_into(&mut a, &b);
+        assert_eq!(a.get(0, 0), [1.5, 2.5, 3.5]);
+        assert_eq!(a.get(1, 0), [1.0, 0.0, 0.0]);
+    }
 
     #[test]
     fn box_downsample_averages_blocks() {

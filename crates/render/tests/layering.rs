@@ -22,6 +22,8 @@ const LAYERS: &[&[&str]] = &[
         "sampler",
         "warp",
         "test_util",
+        "files",
+        "shard",
     ],
     // scene
     &[

@@ -33,7 +33,6 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use crate::bdpt::{render_bdpt_shard, BdptOutput, BdptParams};
-use crate::image::Image;
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use mcmc_core::render_loop::Shard;
@@ -355,22 +354,8 @@ pub fn pilot_light_share(
     pass_light_share(&per_depth, depth)
 }
 
-/// Adds `other` into `image` pixel by pixel (same size; the direct pass plus the chains).
-///
-/// # Panics
-/// If the sizes differ (both are rendered at the camera's size by construction).
-pub fn add_into(image: &mut Image, other: &Image) {
-    assert_eq!(
-        (image.width, image.height),
-        (other.width, other.height),
-        "direct pass and chains must have the same image size"
-    );
-    for (a, b) in image.pixels.iter_mut().zip(&other.pixels) {
-        for c in 0..3 {
-            a[c] += b[c];
-        }
-    }
-}
+/// Adds `other` into `image` pixel by pixel ([`crate::image::add_into`]).
+pub use crate::image::add_into;
 
 #[cfg(test)]
 mod tests {
@@ -472,17 +457,5 @@ mod tests {
         assert_eq!(pass_light_share(&[], 1), None);
         // Non-finite entries are ignored, not propagated.
         assert_eq!(pass_light_share(&[f64::NAN, 1.0, 1.0], 1), Some(0.5));
-    }
-
-    #[test]
-    fn add_into_sums_pixels() {
-        let mut a = Image::new(2, 1);
-        a.set(0, 0, [1.0, 2.0, 3.0]);
-        let mut b = Image::new(2, 1);
-        b.set(0, 0, [0.5, 0.5, 0.5]);
-        b.set(1, 0, [1.0, 0.0, 0.0]);
-        add_into(&mut a, &b);
-        assert_eq!(a.get(0, 0), [1.5, 2.5, 3.5]);
-        assert_eq!(a.get(1, 0), [1.0, 0.0, 0.0]);
     }
 }

@@ -26,8 +26,7 @@ pub use mcmc_core::render_loop::Shard;
 use mcmc_core::render_loop::ExactSplatGrid;
 
 use crate::film::{Film, Filter};
-use crate::image::Image;
-use crate::mlt::direct;
+use crate::image::{add_into, Image};
 
 /// One additive part of an image (see the module documentation).
 #[derive(Clone, Debug)]
@@ -242,7 +241,7 @@ impl Partial {
             if i == 0 {
                 image = img;
             } else {
-                direct::add_into(&mut image, &img);
+                add_into(&mut image, &img);
             }
         }
         (image, dropped)
