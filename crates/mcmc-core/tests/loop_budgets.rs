@@ -9,55 +9,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use mcmc_core::render_loop::{
-    ChainSlot, IndependentStates, LoopBudget, LoopOutput, LoopSettings, RenderLoop, Splat,
-    SplatGrid, MIN_TIME_MUTATIONS,
+    ChainSlot, LoopBudget, LoopOutput, LoopSettings, RenderLoop, SplatGrid, MIN_TIME_MUTATIONS,
 };
-use mcmc_core::{GaussianRandomWalk, Mh, NoAdaptation, NoProgress, Target};
+use mcmc_core::{GaussianRandomWalk, Mh, NoAdaptation, NoProgress};
 
-/// `f(u) = gain (1 + u0)` on the unit square where `u0 >= cut` (zero elsewhere), splatted at
-/// `(4 u0, 0.5)` on a 4x1 image.
-#[derive(Clone, Copy)]
-struct Ramp {
-    cut: f64,
-    gain: f64,
-}
+mod support;
 
-/// A ramp over the whole square.
-const RAMP: Ramp = Ramp {
-    cut: 0.0,
-    gain: 1.0,
-};
-
-impl Target for Ramp {
-    type State = Vec<f64>;
-    type Payload = Option<Splat>;
-    fn evaluate(&self, u: &mut Vec<f64>, out: &mut Option<Splat>) -> f64 {
-        if !u.iter().all(|v| (0.0..1.0).contains(v)) || u[0] < self.cut {
-            *out = None;
-            return f64::NEG_INFINITY;
-        }
-        let f = self.gain * (1.0 + u[0]);
-        *out = Some(Splat {
-            raster: [4.0 * u[0] as f32, 0.5],
-            rgb: [f as f32; 3],
-        });
-        f.ln()
-    }
-}
-
-/// Independent uniform points of the unit square from a key.
-struct Uniform;
-
-impl IndependentStates<Vec<f64>> for Uniform {
-    fn empty(&self) -> Vec<f64> {
-        vec![0.0; 2]
-    }
-    fn independent(&self, key: u64, u: &mut Vec<f64>) {
-        let h = |k: u64| (mcmc_core::seed::mix64(k) >> 11) as f64 / (1u64 << 53) as f64;
-        u.clear();
-        u.extend([h(key), h(key ^ 0x55)]);
-    }
-}
+use support::{Ramp, Uniform, RAMP};
 
 /// Runs the loop over `targets`; `on_kernel` is called with every chain's slot as its kernel
 /// is made (to cancel or stall the set-up at a chosen chain).
@@ -239,6 +197,7 @@ fn rare_light_in_a_small_bootstrap_is_noted() {
         Ramp {
             cut: 0.998,
             gain: 400.0,
+            pixels: 4.0,
         },
     ];
     let settings = LoopSettings {

@@ -9,45 +9,22 @@ use std::sync::atomic::AtomicBool;
 
 use mcmc_core::proposal::Scaled;
 use mcmc_core::render_loop::{
-    ExactSplatGrid, IndependentStates, LoopBudget, LoopSettings, RenderLoop, Shard,
-    SharedController, Splat, SplatGrid, SplatSink,
+    ExactSplatGrid, LoopBudget, LoopSettings, RenderLoop, Shard, SharedController, SplatGrid,
+    SplatSink,
 };
 use mcmc_core::tunable::ScaleTunable;
-use mcmc_core::{Controller, GaussianRandomWalk, Mh, NoAdaptation, NoProgress, StepInfo, Target};
+use mcmc_core::{Controller, GaussianRandomWalk, Mh, NoAdaptation, NoProgress, StepInfo};
 
-/// `f(u) = 1 + u0` on the unit square, splatted at `(8 u0, 0.5)` on an 8x1 image.
-#[derive(Clone, Copy)]
-struct Ramp;
+mod support;
 
-impl Target for Ramp {
-    type State = Vec<f64>;
-    type Payload = Option<Splat>;
-    fn evaluate(&self, u: &mut Vec<f64>, out: &mut Option<Splat>) -> f64 {
-        if !u.iter().all(|v| (0.0..1.0).contains(v)) {
-            *out = None;
-            return f64::NEG_INFINITY;
-        }
-        let f = 1.0 + u[0];
-        *out = Some(Splat {
-            raster: [8.0 * u[0] as f32, 0.5],
-            rgb: [f as f32, 0.3, 0.7],
-        });
-        f.ln()
-    }
-}
+use support::{Ramp, Uniform};
 
-struct Uniform;
-
-impl IndependentStates<Vec<f64>> for Uniform {
-    fn empty(&self) -> Vec<f64> {
-        vec![0.0; 2]
-    }
-    fn independent(&self, key: u64, u: &mut Vec<f64>) {
-        let h = |k: u64| (mcmc_core::seed::mix64(k) >> 11) as f64 / (1u64 << 53) as f64;
-        u.clear();
-        u.extend([h(key), h(key ^ 0x55)]);
-    }
-}
+/// The ramp on an 8 x 1 image.
+const RAMP8: Ramp = Ramp {
+    cut: 0.0,
+    gain: 1.0,
+    pixels: 8.0,
+};
 
 /// A controller that couples the chains: after every round each chain's step size becomes
 /// a function of the acceptances pooled over all chains.
@@ -122,7 +99,7 @@ where
         + Sync,
 {
     let out = RenderLoop {
-        targets: &[Ramp],
+        targets: &[RAMP8],
         states: &Uniform,
         kernel: |_| Mh::new(Scaled::new(GaussianRandomWalk::new(0.2).unwrap(), -3.0)),
         controller: |_| controller,
@@ -194,7 +171,7 @@ fn coupled_chains_run_as_independent_do_not_add_up() {
 fn f64_job_grids_do_not_add_up_exactly() {
     let run = |shard: Shard| {
         RenderLoop {
-            targets: &[Ramp],
+            targets: &[RAMP8],
             states: &Uniform,
             kernel: |_| Mh::new(GaussianRandomWalk::new(0.2).unwrap()),
             controller: |_| NoAdaptation,
@@ -216,7 +193,7 @@ fn f64_job_grids_do_not_add_up_exactly() {
 fn shard_out_of_range_is_an_error() {
     let grid = ExactSplatGrid::new(8, 1);
     let result = RenderLoop {
-        targets: &[Ramp],
+        targets: &[RAMP8],
         states: &Uniform,
         kernel: |_| Mh::new(GaussianRandomWalk::new(0.2).unwrap()),
         controller: |_| NoAdaptation,
