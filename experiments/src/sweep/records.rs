@@ -149,8 +149,10 @@ impl SlotRecord {
     }
 }
 
-/// A number that may be NaN or infinite (JSON numbers cannot): finite values as numbers,
-/// the others as the strings `"NaN"`, `"inf"` and `"-inf"`.
+/// A number that may be NaN or infinite (JSON numbers cannot), stored as a string: finite
+/// values in Rust's shortest round-trip form (parsed back exactly by `str::parse`, whatever
+/// float parser the JSON library uses), the others as `"NaN"`, `"inf"` and `"-inf"`. Plain
+/// JSON numbers are read too.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Num(pub(crate) f64);
 
@@ -164,7 +166,7 @@ impl PartialEq for Num {
 impl Serialize for Num {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         match self.0 {
-            v if v.is_finite() => s.serialize_f64(v),
+            v if v.is_finite() => s.serialize_str(&format!("{v:?}")),
             v if v.is_nan() => s.serialize_str("NaN"),
             v if v > 0.0 => s.serialize_str("inf"),
             _ => s.serialize_str("-inf"),
@@ -186,6 +188,14 @@ impl<'de> Deserialize<'de> for Num {
                 "NaN" => Ok(Self(f64::NAN)),
                 "inf" => Ok(Self(f64::INFINITY)),
                 "-inf" => Ok(Self(f64::NEG_INFINITY)),
+                _ if t
+                    .bytes()
+                    .all(|b| b.is_ascii_digit() || b"+-.eE".contains(&b)) =>
+                {
+                    t.parse::<f64>()
+                        .map(Self)
+                        .map_err(|_| D::Error::custom(format!("{t:?} is not a number")))
+                }
                 _ => Err(D::Error::custom(format!(
                     "expected a number, NaN, inf or -inf, got {t:?}"
                 ))),
