@@ -10,7 +10,7 @@ use super::splat::{SplatObserver, SplatPayload, SplatSink};
 use crate::chain::Chain;
 use crate::controller::Controller;
 use crate::controller::SharedController;
-use crate::kernel::Kernel;
+use crate::kernel::{Kernel, Observer};
 use crate::progress::Progress;
 use crate::target::Target;
 use crate::ChainRng;
@@ -47,31 +47,83 @@ impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
     }
 }
 
-/// One round of a muted job's chains: the same steps as an unmuted job, no splats, no
-/// progress (the shard that owns them reports these mutations).
-fn step_muted<T, K, C>(
+/// How a job's round reports its chains' steps: the splat observer of an owned job (with
+/// the per-chain weight and progress), or nothing for a muted one.
+trait RoundObserver<S, P>: Observer<S, P> {
+    /// Sets the extra factor of the following chain's splats.
+    fn set_weight(&mut self, weight: f64);
+    /// True if the steps count towards this process's progress.
+    fn reports_progress(&self) -> bool;
+}
+
+impl<S, P: SplatPayload, K: SplatSink> RoundObserver<S, P> for SplatObserver<'_, K> {
+    fn set_weight(&mut self, weight: f64) {
+        SplatObserver::set_weight(self, weight);
+    }
+    fn reports_progress(&self) -> bool {
+        true
+    }
+}
+
+/// A muted job ([`super::Shard`]): the same steps, no splats, no progress (the shard that
+/// owns the job reports them).
+impl<S, P> RoundObserver<S, P> for () {
+    fn set_weight(&mut self, _weight: f64) {}
+    fn reports_progress(&self) -> bool {
+        false
+    }
+}
+
+/// The clocks a round polls: `cancelled` always, `late` (the deadline) except in the first
+/// block of a job's first chain in the first round.
+struct Stops<'a> {
+    cancelled: &'a (dyn Fn() -> bool + Sync),
+    late: &'a (dyn Fn() -> bool + Sync),
+    first_round: bool,
+}
+
+/// One round of a job's chains (`round` mutations each, fewer if a chain's budget is
+/// nearly used), polling `stops` every [`POLL_EVERY`] mutations; returns the steps whose
+/// candidate had a non-finite density.
+fn step_round<T, K, C, O>(
     chains: &mut [JobChain<'_, T, K, C>],
+    weights: &[f64],
     round: u64,
-    stop: &(impl Fn() -> bool + Sync),
-) where
+    stops: &Stops<'_>,
+    observer: &mut O,
+    progress: &dyn Progress,
+) -> u64
+where
     T: Target,
     K: Kernel<T>,
     C: Controller<K, T::State>,
+    O: RoundObserver<T::State, T::Payload>,
 {
-    'chains: for (chain, remaining) in chains.iter_mut() {
+    let mut non_finite = 0;
+    'chains: for (i, ((chain, remaining), &weight)) in chains.iter_mut().zip(weights).enumerate() {
+        observer.set_weight(weight);
         let mut left = round.min(*remaining);
+        // The first block of a job's first chain in the first round ignores the deadline.
+        let mut guaranteed = stops.first_round && i == 0;
         while left > 0 {
-            if stop() {
+            if (stops.cancelled)() || (!guaranteed && (stops.late)()) {
                 break 'chains;
             }
+            guaranteed = false;
             let n = left.min(POLL_EVERY);
             for _ in 0..n {
-                let _ = chain.step(&mut ());
+                if chain.step(observer).is_err() {
+                    non_finite += 1;
+                }
             }
             left -= n;
             *remaining -= n;
+            if observer.reports_progress() {
+                progress.advance(n);
+            }
         }
     }
+    non_finite
 }
 
 /// What the rounds ended with.
@@ -108,7 +160,6 @@ where
     let mut first_round = None;
     let cancelled = || cancel.load(Ordering::Relaxed);
     let late = || deadline.is_some_and(|t| Instant::now() >= t);
-    let stop = || cancelled() || late();
     let started = Instant::now();
     loop {
         let first = first_round.is_none();
@@ -127,34 +178,17 @@ where
                 non_finite,
                 muted,
             } = job;
+            let stops = Stops {
+                cancelled: &cancelled,
+                late: &late,
+                first_round: first,
+            };
             if *muted {
-                step_muted(chains, round, &stop);
+                step_round(chains, weights, round, &stops, &mut (), progress);
                 return;
             }
             let mut observer = SplatObserver::new(sink);
-            'chains: for (i, ((chain, remaining), &weight)) in
-                chains.iter_mut().zip(weights.iter()).enumerate()
-            {
-                observer.set_weight(weight);
-                let mut left = round.min(*remaining);
-                // The first block of a job's first chain in the first round ignores the deadline.
-                let mut guaranteed = first && i == 0;
-                while left > 0 {
-                    if cancelled() || (!guaranteed && late()) {
-                        break 'chains;
-                    }
-                    guaranteed = false;
-                    let n = left.min(POLL_EVERY);
-                    for _ in 0..n {
-                        if chain.step(&mut observer).is_err() {
-                            *non_finite += 1;
-                        }
-                    }
-                    left -= n;
-                    *remaining -= n;
-                    progress.advance(n);
-                }
-            }
+            *non_finite += step_round(chains, weights, round, &stops, &mut observer, progress);
             *dropped += observer.dropped;
         });
         for job in jobs.iter_mut() {
