@@ -115,7 +115,16 @@ fn reference(scene: &CoverageScene) -> &'static Reference {
             // For inspection: the reference's mean image, at 64 x 64 pixels.
             let big = (scene.build)(64);
             let cancel = AtomicBool::new(false);
-            let out = render_bdpt(&big, &params, Some(1024), None, 1, false, &NoProgress, &cancel);
+            let out = render_bdpt(
+                &big,
+                &params,
+                Some(1024),
+                None,
+                1,
+                false,
+                &NoProgress,
+                &cancel,
+            );
             let path = std::path::Path::new(&dir).join(format!("{}.png", scene.name));
             render::image_io::write_png(&path, &out.image, 0.0).unwrap();
         }
@@ -187,7 +196,12 @@ fn coverage(index: usize) {
     let scene = (case.build)(SIZE);
     let reference = reference(case);
     assert!(
-        reference.full.iter().map(Image::mean_luminance).sum::<f64>() > 0.0,
+        reference
+            .full
+            .iter()
+            .map(Image::mean_luminance)
+            .sum::<f64>()
+            > 0.0,
         "{}: the reference is black",
         case.name
     );
@@ -263,8 +277,7 @@ fn negative_control_without_light_side_sampling_fails() {
     for index in [0, 1] {
         let case = &SCENES[index];
         let reference = reference(case);
-        let (t, k, m, m_ref) =
-            worst_t(&reference.eye_side_only[half..], &reference.full[..half]);
+        let (t, k, m, m_ref) = worst_t(&reference.eye_side_only[half..], &reference.full[..half]);
         eprintln!(
             "negative control on {}: worst |t| {t:.1} (statistic {k}: {m:.5} vs {m_ref:.5})",
             case.name

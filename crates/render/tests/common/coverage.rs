@@ -72,7 +72,13 @@ fn quad(mesh: &mut Mesh, c: Vec3A, u: Vec3A, w: Vec3A, material: u32) {
 fn room(mesh: &mut Mesh, h: f32, walls: [u32; 3], ceiling_hole: Option<f32>) {
     let [white, red, green] = walls;
     // Floor (faces +y), back wall (+z), front wall (-z), left (+x, red), right (-x, green).
-    quad(mesh, v(0.0, 0.0, 0.0), v(h, 0.0, 0.0), v(0.0, 0.0, -h), white);
+    quad(
+        mesh,
+        v(0.0, 0.0, 0.0),
+        v(h, 0.0, 0.0),
+        v(0.0, 0.0, -h),
+        white,
+    );
     quad(mesh, v(0.0, h, -h), v(h, 0.0, 0.0), v(0.0, h, 0.0), white);
     quad(mesh, v(0.0, h, h), v(0.0, h, 0.0), v(h, 0.0, 0.0), white);
     quad(mesh, v(-h, h, 0.0), v(0.0, h, 0.0), v(0.0, 0.0, h), red);
@@ -91,10 +97,22 @@ fn holed_square(mesh: &mut Mesh, y: f32, h: f32, a: f32, material: u32) {
     let band = (h - a) / 2.0;
     // Strips along x at z < -a and z > a, then the two pieces beside the hole.
     for z in [-(a + band), a + band] {
-        quad(mesh, v(0.0, y, z), v(h, 0.0, 0.0), v(0.0, 0.0, band), material);
+        quad(
+            mesh,
+            v(0.0, y, z),
+            v(h, 0.0, 0.0),
+            v(0.0, 0.0, band),
+            material,
+        );
     }
     for x in [-(a + band), a + band] {
-        quad(mesh, v(x, y, 0.0), v(band, 0.0, 0.0), v(0.0, 0.0, a), material);
+        quad(
+            mesh,
+            v(x, y, 0.0),
+            v(band, 0.0, 0.0),
+            v(0.0, 0.0, a),
+            material,
+        );
     }
 }
 
@@ -129,9 +147,21 @@ fn light(radiance: f32) -> Material {
 /// below the ball's silhouette; nothing else is lit (rays leaving the floor see black).
 pub fn caustic(size: u32) -> Scene {
     let mut mesh = Mesh::new();
-    quad(&mut mesh, v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 0.0, -1.0), 0);
+    quad(
+        &mut mesh,
+        v(0.0, 0.0, 0.0),
+        v(1.0, 0.0, 0.0),
+        v(0.0, 0.0, -1.0),
+        0,
+    );
     mesh.add_sphere(v(0.0, 0.6, 0.0), 0.3, 16, 32, 1, false);
-    quad(&mut mesh, v(0.0, 1.8, 0.0), v(0.1, 0.0, 0.0), v(0.0, 0.0, 0.1), 2);
+    quad(
+        &mut mesh,
+        v(0.0, 1.8, 0.0),
+        v(0.1, 0.0, 0.0),
+        v(0.0, 0.0, 0.1),
+        2,
+    );
     holed_square(&mut mesh, 1.2, 1.0, 0.15, 3);
     let materials = vec![
         Material::diffuse("floor", Vec3::splat(0.7), Vec3::ZERO),
@@ -149,12 +179,36 @@ pub fn caustic(size: u32) -> Scene {
 pub fn two_mirror_room(size: u32) -> Scene {
     let mut mesh = Mesh::new();
     let s = 0.4 / std::f32::consts::SQRT_2;
-    quad(&mut mesh, v(1.5, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 0.0, -1.0), 0);
-    quad(&mut mesh, v(0.0, 2.0, 0.0), v(0.1, 0.0, 0.0), v(0.0, 0.0, -0.1), 2);
+    quad(
+        &mut mesh,
+        v(1.5, 0.0, 0.0),
+        v(1.0, 0.0, 0.0),
+        v(0.0, 0.0, -1.0),
+        0,
+    );
+    quad(
+        &mut mesh,
+        v(0.0, 2.0, 0.0),
+        v(0.1, 0.0, 0.0),
+        v(0.0, 0.0, -0.1),
+        2,
+    );
     // Mirror 1 faces (1, -1, 0): light going up leaves towards +x.
-    quad(&mut mesh, v(0.0, 2.6, 0.0), v(s, s, 0.0), v(0.0, 0.0, 0.4), 1);
+    quad(
+        &mut mesh,
+        v(0.0, 2.6, 0.0),
+        v(s, s, 0.0),
+        v(0.0, 0.0, 0.4),
+        1,
+    );
     // Mirror 2 faces (-1, -1, 0): light going +x leaves downwards.
-    quad(&mut mesh, v(1.5, 2.6, 0.0), v(s, -s, 0.0), v(0.0, 0.0, 0.4), 1);
+    quad(
+        &mut mesh,
+        v(1.5, 2.6, 0.0),
+        v(s, -s, 0.0),
+        v(0.0, 0.0, 0.4),
+        1,
+    );
     let materials = vec![
         Material::diffuse("floor", Vec3::splat(0.7), Vec3::ZERO),
         mirror(),
@@ -168,9 +222,27 @@ pub fn two_mirror_room(size: u32) -> Scene {
 /// vertical mirror; it also lights a diffuse floor directly.
 pub fn mirror_light(size: u32) -> Scene {
     let mut mesh = Mesh::new();
-    quad(&mut mesh, v(0.0, 0.0, 1.5), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), 0);
-    quad(&mut mesh, v(0.0, 1.0, 0.0), v(0.6, 0.0, 0.0), v(0.0, 0.6, 0.0), 1);
-    quad(&mut mesh, v(0.0, 1.3, 4.0), v(0.0, 0.15, 0.0), v(0.15, 0.0, 0.0), 2);
+    quad(
+        &mut mesh,
+        v(0.0, 0.0, 1.5),
+        v(2.0, 0.0, 0.0),
+        v(0.0, 0.0, -2.0),
+        0,
+    );
+    quad(
+        &mut mesh,
+        v(0.0, 1.0, 0.0),
+        v(0.6, 0.0, 0.0),
+        v(0.0, 0.6, 0.0),
+        1,
+    );
+    quad(
+        &mut mesh,
+        v(0.0, 1.3, 4.0),
+        v(0.0, 0.15, 0.0),
+        v(0.15, 0.0, 0.0),
+        2,
+    );
     let materials = vec![
         Material::diffuse("floor", Vec3::splat(0.7), Vec3::ZERO),
         mirror(),
@@ -185,7 +257,13 @@ pub fn mirror_light(size: u32) -> Scene {
 pub fn small_light(size: u32) -> Scene {
     let mut mesh = Mesh::new();
     room(&mut mesh, 1.0, [0, 1, 2], None);
-    quad(&mut mesh, v(0.0, 1.99, 0.0), v(0.02, 0.0, 0.0), v(0.0, 0.0, 0.02), 3);
+    quad(
+        &mut mesh,
+        v(0.0, 1.99, 0.0),
+        v(0.02, 0.0, 0.0),
+        v(0.0, 0.0, 0.02),
+        3,
+    );
     let materials = vec![
         Material::diffuse("white", Vec3::splat(0.7), Vec3::ZERO),
         Material::diffuse("red", Vec3::new(0.6, 0.1, 0.1), Vec3::ZERO),
