@@ -402,10 +402,10 @@ fn flags_without_effect_are_errors_naming_where_they_apply() {
     let out = dir.join("x.exr");
     for (args, needles) in [
         (
-            &["--integrator", "mmlt", "--direct-samples", "4"][..],
+            &["--integrator", "drmlt", "--direct-samples", "4"][..],
             &[
                 "--direct-samples",
-                "--integrator mmlt",
+                "--integrator drmlt",
                 "applies to: pssmlt",
             ][..],
         ),

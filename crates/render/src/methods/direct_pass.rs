@@ -26,10 +26,11 @@ pub struct DirectSettings {
 }
 
 impl DirectSettings {
-    /// No pass.
+    /// No pass (depth 1 and Sobol points if one is asked for later, e.g. by
+    /// `--direct-samples`: direct light only, the split of the Langevin authors' code).
     pub const OFF: Self = Self {
         pass: DirectPass::Off,
-        depth: direct::DIRECT_DEPTH_DEFAULT,
+        depth: 1,
         sampler: SamplerKind::Sobol,
     };
 
