@@ -262,8 +262,9 @@ where
     /// target index, e.g. the MMLT depth): for integrators whose kernel depends on the
     /// chain's target (Langevin MLT: MALA on shallow depths, Kelemen on deep ones) or whose
     /// controllers share statistics through the loop's round hook (a gradient cache). With
-    /// automatic large-step control the chains run [`AutoLargeStep::pooled`] beside the
-    /// caller's controller ([`Both`]). The kernels are not wrapped for large-step MIS.
+    /// automatic large-step control the chains run
+    /// [`mcmc_core::controller::AutoLargeStep::pooled`] beside the caller's controller
+    /// ([`Both`]). The kernels are not wrapped for large-step MIS.
     pub fn run_with_controller<K, C>(
         self,
         make_kernel: impl MakeKernel<K>,
