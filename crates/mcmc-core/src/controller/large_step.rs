@@ -62,6 +62,14 @@ pub struct LargeStepEstimate {
     pub large_step_probability: f64,
 }
 
+impl LargeStepEstimate {
+    /// The steps the estimate was measured on: the estimation phase's mutations.
+    #[must_use]
+    pub const fn steps(&self) -> u64 {
+        self.small_steps + self.large_steps
+    }
+}
+
 /// Running sums for the three statistics; mergeable across chains (estimate in parallel,
 /// then combine with [`LargeStepStats::merge`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

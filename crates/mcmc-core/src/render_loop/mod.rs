@@ -77,8 +77,8 @@ pub enum LoopBudget {
 pub struct LoopSettings {
     /// Number of Markov chains (default 256; 1..=1 048 576). Capped at the number of
     /// mutations under a mutation budget, and under a time budget at what the time left after
-    /// the bootstrap affords (a round or [`MIN_TIME_MUTATIONS`] mutations per chain at the
-    /// bootstrap's rate), with a note.
+    /// the bootstrap affords (a round or [`LoopSettings::min_time_mutations`] mutations per
+    /// chain at the bootstrap's rate), with a note.
     pub chains: usize,
     /// Independent samples per target in the bootstrap (default 100 000, pbrt's value;
     /// 1..=10^12).
@@ -110,6 +110,12 @@ pub struct LoopSettings {
     /// Which part of the fixed job list this run renders (default [`Shard::WHOLE`]): see
     /// [`Shard`].
     pub shard: Shard,
+    /// Under a time budget, the fewest mutations the loop plans per chain (default
+    /// [`MIN_TIME_MUTATIONS`]; >= 1; at least [`LoopSettings::round_mutations`] is planned
+    /// in any case): the chains are capped at what the time left after the bootstrap affords
+    /// at its rate. A controller whose first round is an estimation phase raises it so that
+    /// the phase stays a bounded share of the run.
+    pub min_time_mutations: u64,
 }
 
 /// A part of a render split over processes: shard `index` of `count` owns the contiguous
@@ -164,6 +170,7 @@ impl Default for LoopSettings {
             large_step_mis: false,
             chain_allocation: ChainAllocation::Joint,
             shard: Shard::WHOLE,
+            min_time_mutations: MIN_TIME_MUTATIONS,
         }
     }
 }
@@ -174,7 +181,8 @@ pub const MAX_CHAINS: usize = 1 << 20;
 /// Largest accepted bootstrap size per target.
 pub const MAX_BOOTSTRAP_SAMPLES: u64 = 1_000_000_000_000;
 
-/// Under a time budget, the fewest mutations the loop plans per chain (or one round,
+/// Under a time budget, the default of [`LoopSettings::min_time_mutations`], the fewest
+/// mutations the loop plans per chain (or one round,
 /// [`LoopSettings::round_mutations`], if that is more: a job runs its chains one after the
 /// other, a round each, so chains beyond what the time affords in the first round would never
 /// run): the chains are capped at what the time left after the bootstrap affords at the
@@ -221,6 +229,13 @@ impl LoopSettings {
             ">= 1",
         )?;
         range("jobs", self.jobs as f64, 1.0, 4096.0, "1..=4096")?;
+        range(
+            "min_time_mutations",
+            self.min_time_mutations as f64,
+            1.0,
+            f64::MAX,
+            ">= 1",
+        )?;
         if self.shard.count == 0 || self.shard.index >= self.shard.count {
             return Err(McmcError::InvalidParameter {
                 name: "shard",
@@ -501,7 +516,7 @@ where
             .max()
             .unwrap_or(1)
             .min(settings.bootstrap_samples);
-        let min_chain_mutations = MIN_TIME_MUTATIONS.max(settings.round_mutations);
+        let min_chain_mutations = settings.min_time_mutations.max(settings.round_mutations);
         let boot = bootstrap::run(
             self.targets,
             self.states,

@@ -159,7 +159,9 @@ pub struct McmcStats {
     /// ([`AcceptanceStats::stage_acceptance_rate`]).
     pub acceptance: AcceptanceStats,
     /// The automatic large-step estimate (`eta_s`, `eta_l`, `eta_0`, `p_l`; Zsolnai &
-    /// Szirmay-Kalos 2013, section 2), if automatic control ran to the end of its phase.
+    /// Szirmay-Kalos 2013, section 2), if automatic control ran; its
+    /// [`LargeStepEstimate::steps`] are the estimation phase's mutations
+    /// ([`McmcStats::estimation_share`]).
     pub large_step: Option<LargeStepEstimate>,
     /// The large-step probability after any estimation phase.
     pub large_step_probability: f64,
@@ -210,6 +212,15 @@ impl McmcStats {
         self.acceptance.acceptance_rate()
     }
 
+    /// The share of the mutations that automatic large-step control's estimation phase used
+    /// (its steps over [`McmcStats::mutations`]; `None` without automatic control or without
+    /// mutations).
+    #[must_use]
+    pub fn estimation_share(&self) -> Option<f64> {
+        let e = self.large_step?;
+        (self.mutations > 0).then(|| e.steps() as f64 / self.mutations as f64)
+    }
+
     /// The statistics of an MCMC driver run.
     #[must_use]
     pub fn from_mlt(out: &MltOutput) -> Self {
@@ -256,8 +267,14 @@ pub fn mcmc_notes(out: &MltOutput) -> Vec<String> {
     }
     if let Some(e) = out.large_step {
         notes.push(format!(
-            "automatic large-step control: eta_s = {:.4}, eta_l = {:.4}, eta_0 = {:.4} ({} small, {} large steps) -> p_large = {:.4}",
-            e.eta_s, e.eta_l, e.eta_0, e.small_steps, e.large_steps, e.large_step_probability
+            "automatic large-step control: eta_s = {:.4}, eta_l = {:.4}, eta_0 = {:.4} ({} small, {} large steps: the estimation phase, {:.1} % of the mutations) -> p_large = {:.4}",
+            e.eta_s,
+            e.eta_l,
+            e.eta_0,
+            e.small_steps,
+            e.large_steps,
+            100.0 * e.steps() as f64 / out.mutations.max(1) as f64,
+            e.large_step_probability
         ));
     }
     notes

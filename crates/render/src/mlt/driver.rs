@@ -24,7 +24,7 @@
 
 use std::sync::atomic::AtomicBool;
 
-use mcmc_core::controller::{AutoLargeStep, LargeStepStats, LargeStepTunable};
+use mcmc_core::controller::{LargeStepStats, LargeStepTunable};
 use mcmc_core::render_loop::{
     Both, ChainSlot, IndependentStates, LargeStepMis, LoopBudget, LoopOutput, LoopSettings,
     RenderLoop, SharedController, SplatPayload,
@@ -32,6 +32,7 @@ use mcmc_core::render_loop::{
 use mcmc_core::{Controller, Kernel, McmcError, NoAdaptation, Progress, Target};
 use pss::{FreshPss, PssState};
 
+use super::estimation::{auto_large_step, set_up_estimation};
 use super::run::finish;
 use super::{
     LargeStepMode, MakeKernel, MltBudget, MltEstimator, MltOutput, MltSettings, MmltStrata,
@@ -114,8 +115,8 @@ impl<'a, T, S> MltDriver<'a, T, S> {
 
     /// `n` mutations per chain between two synchronisation points of the loop (default
     /// 1000; controllers that share statistics through the round hook, such as regional
-    /// adaptation, want small rounds). Automatic large-step control sets the first round to
-    /// its estimation phase.
+    /// adaptation, want small rounds). Automatic large-step control sets every round to the
+    /// length of its estimation phase (`mlt::estimation`).
     pub fn round_mutations(self, n: u64) -> Self {
         Self {
             round_mutations: Some(n.max(1)),
@@ -203,26 +204,6 @@ impl<'a, T, S> MltDriver<'a, T, S> {
     }
 }
 
-/// Automatic large-step control's estimation phase (Zsolnai & Szirmay-Kalos 2013, section
-/// 3): `estimation_steps` mutations per chain, at most a tenth of each chain's budget; the
-/// first round of `loop_settings` ends exactly when every chain has run it. Returns the
-/// total number of estimation steps over all chains.
-fn set_up_estimation(loop_settings: &mut LoopSettings, estimation_steps: u64) -> u64 {
-    let chains = loop_settings.chains as u64;
-    let steps = match loop_settings.budget {
-        LoopBudget::Mutations(n) => estimation_steps.min(n / chains / 10),
-        LoopBudget::Time(_) => estimation_steps,
-    }
-    .max(1);
-    loop_settings.round_mutations = steps;
-    steps.saturating_mul(chains)
-}
-
-/// The pooled automatic large-step controller over `total` estimation steps.
-fn auto_large_step(total: u64) -> AutoLargeStep {
-    AutoLargeStep::pooled(total).unwrap_or_else(|_| unreachable!("total >= 1"))
-}
-
 impl<T> MltDriver<'_, T, PrimarySamples>
 where
     T: Target<State = PssState>,
@@ -274,17 +255,17 @@ where
                 initial,
                 estimation_steps,
             } => {
-                let total = set_up_estimation(&mut loop_settings, estimation_steps);
+                set_up_estimation(&mut loop_settings, estimation_steps);
                 let out = self.run_loop(
                     states,
                     |slot| wrap(slot, make_kernel.make(slot, initial)),
-                    |_| auto_large_step(total),
+                    |_| auto_large_step(),
                     &loop_settings,
                     progress,
                     cancel,
                 );
                 finish(out, &self.settings, initial, |pooled: &LargeStepStats| {
-                    (pooled.steps() >= total).then(|| pooled.estimate())
+                    (pooled.steps() > 0).then(|| pooled.estimate())
                 })
             }
         }
@@ -294,8 +275,9 @@ where
     /// target index, e.g. the MMLT depth): for integrators whose kernel depends on the
     /// chain's target (Langevin MLT: MALA on shallow depths, Kelemen on deep ones) or whose
     /// controllers share statistics through the loop's round hook (a gradient cache). With
-    /// automatic large-step control the chains run [`AutoLargeStep::pooled`] beside the
-    /// caller's controller ([`Both`]). The kernels are not wrapped for large-step MIS.
+    /// automatic large-step control the chains run
+    /// [`mcmc_core::controller::AutoLargeStep::pooled`] beside the caller's controller
+    /// ([`Both`]). The kernels are not wrapped for large-step MIS.
     pub fn run_with_controller<K, C>(
         self,
         make_kernel: impl MakeKernel<K>,
@@ -325,11 +307,11 @@ where
                 initial,
                 estimation_steps,
             } => {
-                let total = set_up_estimation(&mut loop_settings, estimation_steps);
+                set_up_estimation(&mut loop_settings, estimation_steps);
                 let out = self.run_loop(
                     &states,
                     |slot| make_kernel.make(slot, initial),
-                    |slot| Both(auto_large_step(total), make_controller(slot)),
+                    |slot| Both(auto_large_step(), make_controller(slot)),
                     &loop_settings,
                     progress,
                     cancel,
@@ -339,7 +321,7 @@ where
                     &self.settings,
                     initial,
                     |pooled: &(LargeStepStats, C::Shared)| {
-                        (pooled.0.steps() >= total).then(|| pooled.0.estimate())
+                        (pooled.0.steps() > 0).then(|| pooled.0.estimate())
                     },
                 )
             }

@@ -4,6 +4,7 @@
 pub mod direct;
 pub mod dr;
 mod driver;
+mod estimation;
 pub mod mala;
 mod path_sampler;
 pub mod pathmlt;
@@ -13,6 +14,7 @@ mod stage_map;
 mod strata;
 
 pub use driver::{GivenStates, MltDriver, PrimarySamples};
+pub use estimation::{ESTIMATION_SHARE_DIVISOR, TIME_BUDGET_ESTIMATION_STEPS};
 pub use path_sampler::{
     mmlt_depth_normalization, mmlt_depth_normalization_until, DepthNormalization, MmltTarget,
     PathPayload, PssmltTarget, PATH_STREAMS,

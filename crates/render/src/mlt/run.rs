@@ -16,15 +16,17 @@ use crate::shard::Component;
 pub enum LargeStepMode {
     /// A fixed probability in `[0, 1]`.
     Fixed(f64),
-    /// Automatic control (Zsolnai & Szirmay-Kalos 2013): every chain first runs
-    /// `estimation_steps` mutations with `initial` large-step probability; `eta_s`, `eta_l`,
-    /// `eta_0` are pooled over all chains (`mcmc_core::controller::AutoLargeStep::pooled`) and
-    /// `p_l` is set for the rest of the render (finite adaptation: the kernel is fixed
-    /// afterwards).
+    /// Automatic control (Zsolnai & Szirmay-Kalos 2013): every chain first runs an
+    /// estimation phase with `initial` large-step probability, of `estimation_steps`
+    /// mutations capped at a tenth of its budget (time budgets: at
+    /// [`super::TIME_BUDGET_ESTIMATION_STEPS`], with the chains capped so that the loop plans
+    /// ten times that per chain; `mlt::estimation`); `eta_s`, `eta_l`, `eta_0` are pooled over
+    /// all chains (`mcmc_core::controller::AutoLargeStep::pooled`) and `p_l` is set for the
+    /// rest of the render (finite adaptation: the kernel is fixed afterwards).
     Auto {
         /// Large-step probability during the estimation phase.
         initial: f64,
-        /// Mutations per chain in the estimation phase.
+        /// Mutations per chain requested for the estimation phase (capped as above).
         estimation_steps: u64,
     },
 }
@@ -84,7 +86,8 @@ pub struct MltOutput {
     pub mutations: u64,
     /// Acceptance statistics pooled over chains.
     pub stats: AcceptanceStats,
-    /// The automatic large-step estimate, if automatic control ran to the end of its phase.
+    /// The automatic large-step estimate, if automatic control ran (its
+    /// [`LargeStepEstimate::steps`] are the estimation phase's mutations).
     pub large_step: Option<LargeStepEstimate>,
     /// The large-step probability used after the estimation phase.
     pub final_large_step_probability: f64,
