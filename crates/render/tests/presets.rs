@@ -6,6 +6,7 @@
 use mcmc_core::langevin::LangevinParams;
 use pathspace::PerturbationKind;
 use pss::{KelemenParams, PairwiseKelemenParams, SmallMutation};
+use render::methods::direct_pass::DirectSettings;
 use render::methods::{
     ChainSettings, DrmltSettings, LqmcSettings, MalaSettings, MethodSettings, MmltSettings,
     PathMltSettings, PssmltSettings,
@@ -148,12 +149,19 @@ fn mala_luan2020_pins_section_7_and_the_code() {
         (MalaVariant::Cache, IntegratorKind::MalaCache),
         (MalaVariant::Hybrid, IntegratorKind::MalaHybrid),
     ] {
-        let s: MethodSettings = MalaSettings::luan2020_variant(variant).into();
+        let preset = MalaSettings::luan2020_variant(variant);
+        assert_eq!(preset.direct, MalaSettings::AUTHORS_DIRECT);
+        let s: MethodSettings = preset.into();
         assert_eq!(s.kind(), kind);
+        // The row's default is the preset with its direct pass budgeted as pssmlt's.
+        let row = MethodSettings::from(MalaSettings {
+            direct: DirectSettings::balanced(1),
+            ..preset
+        });
         assert_eq!(
             kind.settings(),
-            s,
-            "{kind:?}: the row's default is the preset"
+            row,
+            "{kind:?}: the row's default is the preset (balanced direct pass)"
         );
     }
 }
