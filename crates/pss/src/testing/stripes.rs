@@ -144,6 +144,21 @@ impl Stripes {
         }
     }
 
+    /// Two bins, outside and inside the stripes (whether `u0` is in them), with exact
+    /// probabilities `1 / (2 Z)` and `(high + low) / (4 Z)`: a chi-square with one degree of
+    /// freedom on the share of states in the stripes, the statistic that a kernel mishandling
+    /// read-set changes moves (it moves mass across the stripe edges, where the read set
+    /// changes).
+    #[must_use]
+    pub fn stripe_bins(&self) -> PssBins {
+        let inside = 0.25 * (self.high + self.low) / self.normaliser();
+        let target = *self;
+        PssBins::new(vec![1.0 - inside, inside], move |x: &PssState| {
+            let mut x = x.clone();
+            usize::from(target.in_stripes(x.get(0)))
+        })
+    }
+
     /// The unnormalised density inside the stripes at `u1`.
     fn inside(&self, u1: f64) -> f64 {
         if self.is_high(u1) {
@@ -280,6 +295,19 @@ mod tests {
             for (m, p) in mass.iter().zip(bins.probabilities()) {
                 assert!((m - p).abs() < 1e-12, "{t:?}: {m} vs {p}");
             }
+            // The stripe bins are sums of the fine bins.
+            let stripes = t.stripe_bins();
+            let mut share = [0.0; 2];
+            for (b, p) in bins.probabilities().iter().enumerate() {
+                share[usize::from(matches!((b / 2) % 4, 0 | 3))] += p;
+            }
+            for (s, p) in share.iter().zip(stripes.probabilities()) {
+                assert!((s - p).abs() < 1e-12, "{t:?}: {s} vs {p}");
+            }
+            let mut x = PssState::from_values(&[0.0, 0.3]);
+            assert_eq!(stripes.bin_of(&x), 1);
+            x.set(0, 0.2);
+            assert_eq!(stripes.bin_of(&x), 0);
         }
     }
 
