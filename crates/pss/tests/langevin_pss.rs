@@ -213,9 +213,9 @@ fn half_in_stripes() -> Stripes {
 
 /// Cheap-then-expensive as the renderer builds it on MMLT: a small first-stage walk, a
 /// MALA second stage, large steps with probability 0.1.
-fn cheap_then_expensive<Sp: Clone>(space: Sp) -> impl Kernel<Stripes> + Clone
+fn cheap_then_expensive<Sp>(space: Sp) -> impl Kernel<Stripes> + Clone
 where
-    Sp: LangevinSpace<PssState>,
+    Sp: LangevinSpace<PssState> + Clone,
 {
     let p = LangevinParams {
         epsilon: 0.001,
