@@ -204,13 +204,6 @@ fn negative_control_unwrapped_density_fails_at_the_seam() {
     );
 }
 
-/// Stripes with half the mass in them (`high + low = 2`), the stripe at 0 across the seam;
-/// narrow (1/32) stripes and bands, so that a first-stage walk of sigma 0.03 often crosses a
-/// stripe edge, where the read set changes.
-fn half_in_stripes() -> Stripes {
-    Stripes::new(16, 16, 1.9, 0.1).unwrap()
-}
-
 /// Cheap-then-expensive as the renderer builds it on MMLT: a small first-stage walk, a
 /// MALA second stage, large steps with probability 0.1.
 fn cheap_then_expensive<Sp>(space: Sp) -> impl Kernel<Stripes> + Clone
@@ -252,7 +245,7 @@ fn stripe_share_test<K: Kernel<Stripes> + Clone>(
 
 #[test]
 fn cheap_then_expensive_keeps_the_read_set() {
-    let target = half_in_stripes();
+    let target = Stripes::narrow();
     let report = stripe_share_test(&target, &cheap_then_expensive(PssCoordinates), 10);
     eprintln!("stripes / cheap-then-expensive + large step: {report}");
     report.assert_passes("stripes / cheap-then-expensive", STATIONARITY_TESTS);
@@ -284,7 +277,7 @@ impl LangevinSpace<PssState> for IgnoresReadSet {
 
 #[test]
 fn negative_control_cheap_then_expensive_across_read_sets_fails() {
-    let target = half_in_stripes();
+    let target = Stripes::narrow();
     let report = stripe_share_test(&target, &cheap_then_expensive(IgnoresReadSet), 11);
     eprintln!("negative control (first stage across read sets): {report}");
     assert!(
