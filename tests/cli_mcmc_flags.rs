@@ -12,7 +12,13 @@ use render::image_io::read_exr;
 fn drmlt_flags() {
     let dir = temp_dir("drmlt");
     let out = dir.join("dr.exr");
-    for variant in ["tierney-mira", "green-mira", "orbital"] {
+    for variant in [
+        "tierney-mira",
+        "green-mira",
+        "orbital",
+        "tierney-mira-pairwise",
+        "green-mira-pairwise",
+    ] {
         for base in ["pssmlt", "mmlt"] {
             let output = chainlight(&[
                 "render",
@@ -59,7 +65,8 @@ fn drmlt_flags() {
         ],
         &[
             "--dr-variant",
-            "tierney-mira, green-mira, orbital or cheap-then-expensive",
+            "tierney-mira, green-mira, orbital, cheap-then-expensive, tierney-mira-pairwise, \
+             green-mira-pairwise",
         ],
     );
     assert_fails_with(

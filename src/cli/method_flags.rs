@@ -97,9 +97,10 @@ pub(crate) struct MethodFlags {
     /// output, as `<stem>_s<S>_t<T>.exr`.
     #[arg(long)]
     pub(crate) strategy_images: bool,
-    /// drmlt: the second-stage rule, `tierney-mira`, `green-mira`, `orbital` (the paper's
-    /// recommendation) or `cheap-then-expensive` (Gaussian first stage, MALA second stage,
-    /// Green-Mira; on MMLT).
+    /// drmlt: the second-stage rule, `tierney-mira`, `green-mira` (the authors' stages: 1-D
+    /// Kelemen then Gaussian 0.1/64), `orbital` (the paper's recommendation),
+    /// `tierney-mira-pairwise`, `green-mira-pairwise` (pairwise Kelemen stages) or
+    /// `cheap-then-expensive` (Gaussian first stage, MALA second stage, Green-Mira; on MMLT).
     #[arg(long, value_name = "RULE", default_value = "orbital", value_parser = parse::dr_variant)]
     pub(crate) dr_variant: DrVariant,
     /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).

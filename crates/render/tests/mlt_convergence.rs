@@ -70,11 +70,13 @@ const BLOCKS: usize = 4;
 /// Max depth of the enclosure renders.
 const ENCLOSURE_DEPTH: u32 = 3;
 /// Null-hypothesis comparisons in this file: the enclosure's image mean (PSSMLT, MMLT, the
-/// four DR configurations, the four MALA variants and cheap-then-expensive) and MMLT's
-/// per-depth bootstrap means (depths `0..=ENCLOSURE_DEPTH`); the Cornell box's image mean and
-/// blocks (PSSMLT, MMLT, four DR configurations, four MALA variants, cheap-then-expensive).
+/// six DR configurations — orbital, the authors' and the pairwise Tierney-Mira and
+/// Green-Mira on PSSMLT, orbital on MMLT — the four MALA variants and cheap-then-expensive)
+/// and MMLT's per-depth bootstrap means (depths `0..=ENCLOSURE_DEPTH`); the Cornell box's
+/// image mean and blocks (PSSMLT, MMLT, six DR configurations, four MALA variants,
+/// cheap-then-expensive).
 const N_COMPARISONS: usize =
-    (2 + 4 + 5) + (ENCLOSURE_DEPTH as usize + 1) + 11 * (1 + BLOCKS * BLOCKS);
+    (2 + 6 + 5) + (ENCLOSURE_DEPTH as usize + 1) + 13 * (1 + BLOCKS * BLOCKS);
 
 // ---------------------------------------------------------------------------------------------
 // Student's t (`common::stats`).
@@ -173,6 +175,16 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
                 ),
                 DrVariant::GreenMira => MltDriver::new(&targets, settings).run(
                     |p| dr::green_mira_kernel(layout, base, p, 0),
+                    &NoProgress,
+                    &cancel,
+                ),
+                DrVariant::TierneyMiraPairwise => MltDriver::new(&targets, settings).run(
+                    |p| dr::pairwise_tierney_mira_kernel(layout, base, p, 0),
+                    &NoProgress,
+                    &cancel,
+                ),
+                DrVariant::GreenMiraPairwise => MltDriver::new(&targets, settings).run(
+                    |p| dr::pairwise_green_mira_kernel(layout, base, p, 0),
                     &NoProgress,
                     &cancel,
                 ),
@@ -294,6 +306,8 @@ fn drmlt_variants_match_the_analytic_enclosure() {
     enclosure_case(Method::Dr(DrVariant::TierneyMira), 6000);
     enclosure_case(Method::Dr(DrVariant::GreenMira), 7000);
     enclosure_case(Method::DrMmlt, 8000);
+    enclosure_case(Method::Dr(DrVariant::TierneyMiraPairwise), 6500);
+    enclosure_case(Method::Dr(DrVariant::GreenMiraPairwise), 7500);
 }
 
 /// MMLT's per-depth targets: in the enclosure every path of depth `d` carries `Le rho^d`, and
@@ -459,10 +473,19 @@ fn drmlt_orbital_converges_to_bdpt_on_the_cornell_box() {
     cornell_case(Method::Dr(DrVariant::Orbital), 5000, PSSMLT_MPP);
 }
 
+/// The authors' Tierney-Mira and Green-Mira (1-D Kelemen first stage, Gaussian 0.1/64
+/// second stage).
 #[test]
 fn drmlt_tierney_mira_and_green_mira_converge_to_bdpt_on_the_cornell_box() {
     cornell_case(Method::Dr(DrVariant::TierneyMira), 6000, PSSMLT_MPP);
     cornell_case(Method::Dr(DrVariant::GreenMira), 7000, PSSMLT_MPP);
+}
+
+/// Tierney-Mira and Green-Mira over the pairwise stages.
+#[test]
+fn drmlt_pairwise_tierney_mira_and_green_mira_converge_to_bdpt_on_the_cornell_box() {
+    cornell_case(Method::Dr(DrVariant::TierneyMiraPairwise), 6500, PSSMLT_MPP);
+    cornell_case(Method::Dr(DrVariant::GreenMiraPairwise), 7500, PSSMLT_MPP);
 }
 
 #[test]

@@ -183,6 +183,20 @@ where
             progress,
             cancel,
         ),
+        DrVariant::TierneyMiraPairwise => MltDriver::new(targets, mlt_settings).run(
+            mlt::PerChain(|slot: ChainSlot, p| {
+                dr::pairwise_tierney_mira_kernel(layout, base, p, slot.target as u32)
+            }),
+            progress,
+            cancel,
+        ),
+        DrVariant::GreenMiraPairwise => MltDriver::new(targets, mlt_settings).run(
+            mlt::PerChain(|slot: ChainSlot, p| {
+                dr::pairwise_green_mira_kernel(layout, base, p, slot.target as u32)
+            }),
+            progress,
+            cancel,
+        ),
         DrVariant::CheapThenExpensive => {
             unreachable!("cheap-then-expensive runs through the Langevin driver")
         }
