@@ -69,7 +69,10 @@ pub(crate) const RULES: &[FlagRule] = &[
     },
     FlagRule {
         id: "large_step_mis",
-        applies: |m| matches!(m, M::Pssmlt(_) | M::Mmlt(_)),
+        applies: |m| {
+            matches!(m, M::Pssmlt(_) | M::Mmlt(_))
+                || matches!(m, M::Drmlt(d) if d.variant != DrVariant::CheapThenExpensive)
+        },
         also: "",
     },
     FlagRule {
@@ -266,7 +269,8 @@ mod tests {
         let with = |base: &[&'static str], more: &[&'static str]| [base, more].concat();
         match id {
             "large_step" => MCMC_PSS.to_vec(),
-            "large_step_mis" | "raster_mutation" => vec!["pssmlt", "mmlt"],
+            "large_step_mis" => vec!["pssmlt", "mmlt", "drmlt"],
+            "raster_mutation" => vec!["pssmlt", "mmlt"],
             "chain_allocation" | "strategy_strata" | "bdpt_normalization" => vec!["mmlt"],
             "direct_samples" | "direct_share" | "direct_depth" => vec!["pssmlt"],
             // drmlt's default rule (orbital) has its own second-stage kernel.

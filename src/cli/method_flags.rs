@@ -212,6 +212,7 @@ impl MethodFlags {
                 s.chain = self.chain();
                 s.variant = self.dr_variant;
                 s.on = self.dr_on;
+                s.large_step_mis = self.large_step_mis.unwrap_or(s.large_step_mis);
                 s.mala.params = self.mala_preset;
                 s.mala.max_depth = self.mala_max_depth;
                 s.mala.gradient = self.mala_gradient;

@@ -120,6 +120,34 @@ fn drmlt_tierney_mira_and_green_mira_are_bit_identical() {
     }
 }
 
+/// Delayed rejection with the large-step MIS estimator (`--large-step-mis on`): 1 and 2
+/// threads give the same image, and the option changes the image.
+#[test]
+fn drmlt_large_step_mis_is_bit_identical() {
+    use render::mlt::dr::{DrBase, DrVariant};
+    let scene = Scene::cornell_box(24, 16);
+    for (variant, base) in [
+        (DrVariant::Orbital, DrBase::Pssmlt),
+        (DrVariant::TierneyMira, DrBase::Mmlt),
+    ] {
+        let with = |threads, mis| {
+            let mut method = DrmltSettings::rioux_lavoie2020_with(variant, base);
+            method.large_step_mis = mis;
+            with_method(method.into(), 24, 16, threads, 15)
+        };
+        let reference = run(&scene, &with(1, true));
+        assert!(reference.mean_luminance() > 0.0, "{variant:?} {base:?}");
+        assert!(
+            bits(&run(&scene, &with(2, true))) == bits(&reference),
+            "{variant:?} {base:?}: 2 threads differ from 1"
+        );
+        assert!(
+            bits(&run(&scene, &with(1, false))) != bits(&reference),
+            "{variant:?} {base:?}: the option has no effect"
+        );
+    }
+}
+
 /// PSSMLT and MMLT with the large-step MIS estimator (`--large-step-mis on`), under fixed and
 /// automatic large-step probability: 1, 2 and 3 threads give the same image.
 #[test]
