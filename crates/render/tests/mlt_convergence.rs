@@ -53,8 +53,8 @@ use render::image::Image;
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::mala::{self, MalaConfig, MalaVariant};
 use render::mlt::{
-    LargeStepMode, MltBudget, MltDriver, MltOutput, MltSettings, MmltTarget, PerChain,
-    PssmltTarget, PATH_STREAMS,
+    LargeStepMode, MltBudget, MltDriver, MltEstimator, MltOutput, MltSettings, MmltTarget,
+    PerChain, PssmltTarget, PATH_STREAMS,
 };
 use render::scene::{CameraSpec, Material, Mesh, Scene};
 use render::session::NoProgress;
@@ -70,13 +70,14 @@ const BLOCKS: usize = 4;
 /// Max depth of the enclosure renders.
 const ENCLOSURE_DEPTH: u32 = 3;
 /// Null-hypothesis comparisons in this file: the enclosure's image mean (PSSMLT, MMLT, the
-/// six DR configurations — orbital, the authors' and the pairwise Tierney-Mira and
-/// Green-Mira on PSSMLT, orbital on MMLT — the four MALA variants and cheap-then-expensive)
+/// seven DR configurations — orbital, the authors' and the pairwise Tierney-Mira and
+/// Green-Mira on PSSMLT, orbital on MMLT, orbital with large-step MIS — the four MALA
+/// variants and cheap-then-expensive)
 /// and MMLT's per-depth bootstrap means (depths `0..=ENCLOSURE_DEPTH`); the Cornell box's
 /// image mean and blocks (PSSMLT, MMLT, six DR configurations, four MALA variants,
 /// cheap-then-expensive).
 const N_COMPARISONS: usize =
-    (2 + 6 + 5) + (ENCLOSURE_DEPTH as usize + 1) + 13 * (1 + BLOCKS * BLOCKS);
+    (2 + 7 + 5) + (ENCLOSURE_DEPTH as usize + 1) + 13 * (1 + BLOCKS * BLOCKS);
 
 // ---------------------------------------------------------------------------------------------
 // Student's t (`common::stats`).
@@ -118,6 +119,8 @@ enum Method {
     Dr(DrVariant),
     /// Delayed-rejection MLT over MMLT, orbital second stage on the camera subpath.
     DrMmlt,
+    /// Orbital delayed rejection over PSSMLT with the large-step MIS estimator.
+    DrMis,
     /// Langevin MLT (`render::mlt::mala`) with the given adaptation.
     Mala(MalaVariant),
     /// Delayed rejection, cheap (Gaussian) then expensive (MALA), on MMLT.
@@ -214,6 +217,20 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             &NoProgress,
             &cancel,
         ),
+        Method::DrMis => {
+            let targets = [PssmltTarget::new(scene, params, w, h)];
+            let layout = dr::dr_layout(params.max_depth);
+            MltDriver::new(&targets, settings)
+                .estimator(MltEstimator {
+                    large_step_mis: true,
+                    ..MltEstimator::plain()
+                })
+                .run(
+                    |p| dr::orbital_kernel(layout, DrBase::Pssmlt, p, 0),
+                    &NoProgress,
+                    &cancel,
+                )
+        }
         Method::DrMmlt => {
             let layout = dr::dr_layout(params.max_depth);
             MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings).run(
@@ -308,6 +325,7 @@ fn drmlt_variants_match_the_analytic_enclosure() {
     enclosure_case(Method::DrMmlt, 8000);
     enclosure_case(Method::Dr(DrVariant::TierneyMiraPairwise), 6500);
     enclosure_case(Method::Dr(DrVariant::GreenMiraPairwise), 7500);
+    enclosure_case(Method::DrMis, 8500);
 }
 
 /// MMLT's per-depth targets: in the enclosure every path of depth `d` carries `Le rho^d`, and
