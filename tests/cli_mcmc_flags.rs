@@ -83,7 +83,7 @@ fn drmlt_flags() {
     );
 }
 
-/// `--large-step-mis`: on by default for pssmlt, off for mmlt (docs/methods/large-step-mis.md,
+/// `--large-step-mis`: on by default for pssmlt, off for mmlt and drmlt (docs/methods/large-step-mis.md,
 /// "Measured"); `on` / `off` override it, and the render says when it is on.
 #[test]
 fn large_step_mis_defaults_per_integrator_and_can_be_set() {
@@ -94,6 +94,8 @@ fn large_step_mis_defaults_per_integrator_and_can_be_set() {
         ("pssmlt", Some("off"), false),
         ("mmlt", None, false),
         ("mmlt", Some("on"), true),
+        ("drmlt", None, false),
+        ("drmlt", Some("on"), true),
     ] {
         let mut args = vec![
             "render",

@@ -132,7 +132,7 @@ impl Method for DrmltSettings {
                     DrBase::Mmlt => "MMLT (camera subpath only)",
                 },
                 if self.large_step_mis {
-                    "; large steps combined by MIS"
+                    "; large-step MIS (Kelemen et al. 2002)"
                 } else {
                     ""
                 }
