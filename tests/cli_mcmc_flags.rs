@@ -12,7 +12,13 @@ use render::image_io::read_exr;
 fn drmlt_flags() {
     let dir = temp_dir("drmlt");
     let out = dir.join("dr.exr");
-    for variant in ["tierney-mira", "green-mira", "orbital"] {
+    for variant in [
+        "tierney-mira",
+        "green-mira",
+        "orbital",
+        "tierney-mira-pairwise",
+        "green-mira-pairwise",
+    ] {
         for base in ["pssmlt", "mmlt"] {
             let output = chainlight(&[
                 "render",
@@ -59,7 +65,8 @@ fn drmlt_flags() {
         ],
         &[
             "--dr-variant",
-            "tierney-mira, green-mira, orbital or cheap-then-expensive",
+            "tierney-mira, green-mira, orbital, cheap-then-expensive, tierney-mira-pairwise, \
+             green-mira-pairwise",
         ],
     );
     assert_fails_with(
@@ -76,7 +83,7 @@ fn drmlt_flags() {
     );
 }
 
-/// `--large-step-mis`: on by default for pssmlt, off for mmlt (docs/methods/large-step-mis.md,
+/// `--large-step-mis`: on by default for pssmlt, off for mmlt and drmlt (docs/methods/large-step-mis.md,
 /// "Measured"); `on` / `off` override it, and the render says when it is on.
 #[test]
 fn large_step_mis_defaults_per_integrator_and_can_be_set() {
@@ -87,6 +94,8 @@ fn large_step_mis_defaults_per_integrator_and_can_be_set() {
         ("pssmlt", Some("off"), false),
         ("mmlt", None, false),
         ("mmlt", Some("on"), true),
+        ("drmlt", None, false),
+        ("drmlt", Some("on"), true),
     ] {
         let mut args = vec![
             "render",

@@ -81,7 +81,10 @@ pub(crate) const RULES: &[FlagRule] = &[
     },
     FlagRule {
         id: "large_step_mis",
-        applies: |m| matches!(m, M::Pssmlt(_) | M::Mmlt(_)),
+        applies: |m| {
+            matches!(m, M::Pssmlt(_) | M::Mmlt(_))
+                || matches!(m, M::Drmlt(d) if d.variant != DrVariant::CheapThenExpensive)
+        },
         also: "",
     },
     FlagRule {
@@ -279,7 +282,8 @@ mod tests {
         let with = |base: &[&'static str], more: &[&'static str]| [base, more].concat();
         match id {
             "large_step" => MCMC_PSS.to_vec(),
-            "large_step_mis" | "raster_mutation" => vec!["pssmlt", "pssmlt-pt", "mmlt"],
+            "large_step_mis" => vec!["pssmlt", "pssmlt-pt", "mmlt", "drmlt"],
+            "raster_mutation" => vec!["pssmlt", "pssmlt-pt", "mmlt"],
             "chain_allocation" | "strategy_strata" | "bdpt_normalization" => vec!["mmlt"],
             // mmlt's pass is off by default: giving it samples or a share turns it on.
             "direct_samples" | "direct_share" => with(MALA, &["pssmlt", "pssmlt-pt", "mmlt"]),

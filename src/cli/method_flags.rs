@@ -98,9 +98,10 @@ pub(crate) struct MethodFlags {
     /// output, as `<stem>_s<S>_t<T>.exr`.
     #[arg(long)]
     pub(crate) strategy_images: bool,
-    /// drmlt: the second-stage rule, `tierney-mira`, `green-mira`, `orbital` (the paper's
-    /// recommendation) or `cheap-then-expensive` (Gaussian first stage, MALA second stage,
-    /// Green-Mira; on MMLT).
+    /// drmlt: the second-stage rule, `tierney-mira`, `green-mira` (the authors' stages: 1-D
+    /// Kelemen then Gaussian 0.1/64), `orbital` (the paper's recommendation),
+    /// `tierney-mira-pairwise`, `green-mira-pairwise` (pairwise Kelemen stages) or
+    /// `cheap-then-expensive` (Gaussian first stage, MALA second stage, Green-Mira; on MMLT).
     #[arg(long, value_name = "RULE", default_value = "orbital", value_parser = parse::dr_variant)]
     pub(crate) dr_variant: DrVariant,
     /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).
@@ -225,6 +226,7 @@ impl MethodFlags {
                 s.chain = self.chain();
                 s.variant = self.dr_variant;
                 s.on = self.dr_on;
+                s.large_step_mis = self.large_step_mis.unwrap_or(s.large_step_mis);
                 s.mala.params = self.mala_preset;
                 s.mala.max_depth = self.mala_max_depth;
                 s.mala.gradient = self.mala_gradient;

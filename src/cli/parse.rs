@@ -200,9 +200,11 @@ pub(crate) fn dr_variant(text: &str) -> Result<render::mlt::dr::DrVariant, Strin
         .find(|(name, _)| name.eq_ignore_ascii_case(text.trim()))
         .map(|&(_, v)| v)
         .ok_or_else(|| {
-            format!(
-                "expected tierney-mira, green-mira, orbital or cheap-then-expensive, got '{text}'"
-            )
+            let names: Vec<&str> = render::mlt::dr::DrVariant::ALL
+                .iter()
+                .map(|&(name, _)| name)
+                .collect();
+            format!("expected one of {}, got '{text}'", names.join(", "))
         })
 }
 

@@ -27,6 +27,22 @@ pub trait Point: Clone + Send + std::fmt::Debug {
     fn absorb_rejected(&mut self, rejected: &Self) {
         let _ = rejected;
     }
+
+    /// Called by kernels whose acceptance reads proposal densities of whole states (delayed
+    /// rejection under Tierney & Mira's or Green & Mira's rule, eq. 6 and 12-14 of the DR
+    /// paper) on an evaluated candidate, before those densities are computed, with `known`
+    /// either the state it was proposed from (its parent) or another candidate proposed from
+    /// the same parent (a sibling).
+    ///
+    /// A lazily mutated candidate stores stale values for the coordinates its evaluation did
+    /// not read, so a density over its stored coordinates would read values the eager
+    /// candidate does not have. It must bring every coordinate it stores, the parent stores,
+    /// or the sibling drew of the parent, up to date, logging the parent values it draws as an
+    /// evaluation does (so that [`Point::absorb_rejected`] keeps them). The default does
+    /// nothing, which is right for every state that is fully defined when it is proposed.
+    fn catch_up_with(&mut self, known: &Self) {
+        let _ = known;
+    }
 }
 
 impl Point for f64 {}

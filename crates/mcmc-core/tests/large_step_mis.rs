@@ -1,7 +1,8 @@
 //! Kelemen et al. 2002's large-step MIS estimator (`render_loop::LargeStepMis`): the
 //! splat-weight check from exact starts with two targets and three large-step
-//! probabilities, two negative controls (the large step's term dropped from the
-//! denominators; weights from a stale `p`), and the render loop with the option on: the
+//! probabilities, over MH and over two-stage delayed rejection (Tierney-Mira, with and
+//! without a second stage after large steps), two negative controls for each (the large
+//! step's term dropped from the denominators; weights from a stale `p`), and the render loop with the option on: the
 //! exact image of two targets with different `b_d`, bit-identical for 1 and 3 threads, no
 //! allocation per mutation.
 //!
@@ -20,6 +21,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::AtomicBool;
 
+use mcmc_core::delayed_rejection::IndependentSecondStage;
 use mcmc_core::render_loop::{
     IndependentStates, LargeStepMis, LoopBudget, LoopSettings, RenderLoop, Splat, SplatGrid,
     SplatObserver,
@@ -29,7 +31,9 @@ use mcmc_core::testing::{
     SplatParams, SplatWeightReport,
 };
 use mcmc_core::toy::{PiecewiseConstant, ToyTarget, UniformMixture};
-use mcmc_core::{Chain, Kernel, Mh, NoAdaptation, NoProgress, Target};
+use mcmc_core::{
+    Chain, DelayedRejection, GaussianRandomWalk, Kernel, Mh, NoAdaptation, NoProgress, Target,
+};
 use rand::SeedableRng;
 
 /// Counts allocations per thread, to show a step of the wrapped kernel allocates nothing.
@@ -55,7 +59,7 @@ unsafe impl GlobalAlloc for Counting {
 static ALLOCATOR: Counting = Counting;
 
 /// Splat-weight checks in this file that must pass (Sidak correction). Keep in sync.
-const SPLAT_TESTS: usize = 4;
+const SPLAT_TESTS: usize = 7;
 
 /// Independent exact starts per check.
 const STARTS: usize = 20_000;
@@ -139,6 +143,74 @@ fn weights_from_a_stale_large_step_probability_fail() {
         p_weights: 0.6,
     };
     let report = check("uniform mixture / MIS with a stale p", &target, &bad, 6);
+    assert!(report.p_value < OVERWHELMING, "{report}");
+}
+
+/// Tierney-Mira delayed rejection over [`walk`] (bold first stage with large steps), a timid
+/// Gaussian second stage from `x`; after small steps only (the DR paper's setting) or after
+/// large steps too.
+fn delayed_rejection<T: ToyTarget>(
+    target: &T,
+    p_large: f64,
+    after_large_steps: bool,
+) -> DelayedRejection<LargeStepWalk, IndependentSecondStage<GaussianRandomWalk>> {
+    let dr = DelayedRejection::tierney_mira(
+        walk(target, p_large),
+        IndependentSecondStage(GaussianRandomWalk::new(0.01).unwrap()),
+    )
+    .with_symmetric_second_stage();
+    if after_large_steps {
+        dr
+    } else {
+        dr.second_stage_after_small_steps()
+    }
+}
+
+/// Two-stage kernels keep the observer contract, so the same weights are unbiased for them:
+/// each splat (`y`, `z`, `x`) times `m`, plus the large-step candidate's extra splat.
+#[test]
+fn combined_estimator_is_unbiased_for_delayed_rejection() {
+    let mixture = UniformMixture::rioux_lavoie2020();
+    let holes = PiecewiseConstant::with_holes();
+    for (after_large, p, seed) in [(false, 0.3, 7), (true, 0.5, 8)] {
+        let what = format!("uniform mixture / DR + MIS, p = {p}, after large {after_large}");
+        let w = walk(&mixture, p);
+        let kernel = LargeStepMis::new(
+            delayed_rejection(&mixture, p, after_large),
+            1.0,
+            w.large_step_density(),
+        );
+        let report = check(&what, &mixture, &kernel, seed);
+        report.assert_passes(&what, SPLAT_TESTS);
+    }
+    let w = walk(&holes, 0.3);
+    let kernel = LargeStepMis::new(
+        delayed_rejection(&holes, 0.3, false),
+        1.0,
+        w.large_step_density(),
+    );
+    let what = "holes / DR + MIS, p = 0.3";
+    check(what, &holes, &kernel, 9).assert_passes(what, SPLAT_TESTS);
+}
+
+/// Negative controls over delayed rejection: the large step's term dropped, and a stale `p`.
+#[test]
+fn broken_weights_fail_for_delayed_rejection() {
+    let target = UniformMixture::rioux_lavoie2020();
+    let bad = MisWithoutLargeStepTerm(delayed_rejection(&target, 0.3, false));
+    let report = check("uniform mixture / DR + MIS without p q", &target, &bad, 10);
+    assert!(report.p_value < OVERWHELMING, "{report}");
+    let stale = MisWithStaleProbability {
+        b_q: walk(&target, 0.1).large_step_density(),
+        kernel: delayed_rejection(&target, 0.1, false),
+        p_weights: 0.6,
+    };
+    let report = check(
+        "uniform mixture / DR + MIS with a stale p",
+        &target,
+        &stale,
+        11,
+    );
     assert!(report.p_value < OVERWHELMING, "{report}");
 }
 

@@ -8,11 +8,14 @@
 //! - [`orbital_kernel`] (section 4.4, eq. 11): a pairwise polar Kelemen first stage (radii
 //!   x 1.9, the authors' preset [`PairwiseKelemenParams::drmlt2020`]) and the orbital second
 //!   stage (wrapped Cauchy, rho = exp(-1/4));
-//! - [`tierney_mira_kernel`] (eq. 6-7): the same bold first stage, then a timid pairwise
-//!   Kelemen step from `x` with radii x [`TIMID_SCALE`] (independent of the rejected `y`;
-//!   symmetric);
-//! - [`green_mira_kernel`] (eq. 12-14): the same stages with the fictional state
-//!   `y* = z - (y - x)` on the torus ([`LayoutGhost`]).
+//! - [`tierney_mira_kernel`] (eq. 6-7) and [`green_mira_kernel`] (eq. 12-14, the fictional
+//!   state `y* = z - (y - x)` on the torus, [`LayoutGhost`]) as the authors run them (Fig. 7):
+//!   a 1-D Kelemen first stage (eq. 9, `[1/1024, 1/64]`, every coordinate of the layout
+//!   independently, [`kelemen_first_stage`]), then an isotropic Gaussian step from `x` with
+//!   sigma `(1/64) x 0.1` ([`gaussian_timid_stage`]; [`PerCoordinateParams`]);
+//! - [`pairwise_tierney_mira_kernel`] and [`pairwise_green_mira_kernel`]: the same rules over
+//!   the orbital variant's pairwise first stage, then a timid pairwise Kelemen step from `x`
+//!   with radii x [`TIMID_SCALE`] (this crate's own variants, kept for comparison).
 //!
 //! A renderer supplies two things: the [`PairLayout`] of coordinates the pairwise stages move
 //! per stream (what its path sampler reads; coordinates beyond it are renewed by large steps
@@ -44,11 +47,53 @@ use crate::orbital::Orbital;
 use crate::pairwise::{PairLayout, PairwiseKelemen, PairwiseKelemenParams};
 use crate::proposal::ALL_STREAMS;
 use crate::state::PssState;
+use crate::KelemenParams;
+use crate::SmallMutation;
 use crate::WrappedCauchy;
 
-/// The radius scale of the timid second stage of Tierney-Mira and Green-Mira (the authors'
-/// sigma / 10, DR paper section 5.1).
+/// The scale of the timid second stage of Tierney-Mira and Green-Mira (the authors'
+/// `scaleSecond`: their second-stage Gaussian has sigma x 0.1; the pairwise variants scale
+/// their radii by it).
 pub const TIMID_SCALE: f64 = 0.1;
+
+/// The authors' Gaussian sigma, 1/64 (reference implementation's default `sigma`), which
+/// [`TIMID_SCALE`] scales for the second stage of their Tierney-Mira and Green-Mira.
+pub const AUTHORS_SIGMA: f64 = 1.0 / 64.0;
+
+/// The stages of the authors' Tierney-Mira and Green-Mira: a 1-D Kelemen first stage on
+/// every coordinate and a Gaussian second stage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PerCoordinateParams {
+    /// The first stage's Kelemen bounds (eq. 9).
+    pub kelemen: KelemenParams,
+    /// The second stage's standard deviation per coordinate.
+    pub second_sigma: f64,
+}
+
+impl PerCoordinateParams {
+    /// The authors' values (DR paper sections 4.3 and 5.1, Fig. 7; reference implementation
+    /// defaults): Kelemen `[1/1024, 1/64]` (not scaled: the x 1.9 is the pairwise step's),
+    /// second-stage sigma `AUTHORS_SIGMA x TIMID_SCALE = 0.1/64`.
+    #[must_use]
+    pub const fn rioux_lavoie2020() -> Self {
+        Self {
+            kelemen: KelemenParams::kelemen2002(),
+            second_sigma: AUTHORS_SIGMA * TIMID_SCALE,
+        }
+    }
+}
+
+/// The authors' first stage of Tierney-Mira and Green-Mira ([`kelemen_first_stage`]).
+pub type KelemenFirstStage = PairwiseMltProposal<OnLayout<SmallMutation>>;
+
+/// The authors' second stage of Tierney-Mira and Green-Mira ([`gaussian_timid_stage`]).
+pub type GaussianTimidStage = IndependentSecondStage<OnLayout<SmallMutation>>;
+
+impl Default for PerCoordinateParams {
+    fn default() -> Self {
+        Self::rioux_lavoie2020()
+    }
+}
 
 /// Which of two second stages a state gets: the *alternate* one where
 /// [`StageChoice::alternate`] is true, the *normal* one elsewhere.
@@ -180,8 +225,8 @@ pub fn first_stage(layout: PairLayout, p_large: f64) -> PairwiseMltProposal {
         .unwrap_or_else(|_| unreachable!("clamped"))
 }
 
-/// The timid second stage of Tierney-Mira and Green-Mira: a pairwise Kelemen step from `x`
-/// with radii scaled by [`TIMID_SCALE`], on the streams of `stream_mask`.
+/// The timid second stage of the pairwise Tierney-Mira and Green-Mira: a pairwise Kelemen
+/// step from `x` with radii scaled by [`TIMID_SCALE`], on the streams of `stream_mask`.
 #[must_use]
 pub fn timid_stage(
     layout: PairLayout,
@@ -219,10 +264,81 @@ pub fn orbital_kernel<C>(
     DelayedRejection::orbital(first_stage(layout, p_large), second).second_stage_after_small_steps()
 }
 
-/// The Tierney-Mira kernel (eq. 6-7): [`first_stage`], then [`timid_stage`] on the streams of
-/// `streams` after a rejected small step.
+/// The authors' bold first stage of Tierney-Mira and Green-Mira: a large step with
+/// probability `p_large` (clamped to `[0, 1]`), else Kelemen's 1-D perturbation (DR paper
+/// eq. 9, bounds `params.kelemen`) applied independently to every coordinate of every
+/// stream of `layout`.
+#[must_use]
+pub fn kelemen_first_stage(
+    layout: PairLayout,
+    p_large: f64,
+    params: PerCoordinateParams,
+) -> KelemenFirstStage {
+    let small = OnLayout::new(SmallMutation::Kelemen(params.kelemen), layout);
+    PairwiseMltProposal::new(small, p_large.clamp(0.0, 1.0))
+        .unwrap_or_else(|_| unreachable!("clamped"))
+}
+
+/// The authors' timid second stage of Tierney-Mira and Green-Mira: an isotropic Gaussian step
+/// from `x` (standard deviation `params.second_sigma` per coordinate, wrapped) on every
+/// coordinate of `layout` in the streams of `stream_mask`; it ignores the rejected `y` and is
+/// symmetric.
+#[must_use]
+pub fn gaussian_timid_stage(
+    layout: PairLayout,
+    stream_mask: u8,
+    params: PerCoordinateParams,
+) -> GaussianTimidStage {
+    let sigma = params.second_sigma;
+    IndependentSecondStage(
+        OnLayout::new(SmallMutation::Gaussian { sigma }, layout).with_stream_mask(stream_mask),
+    )
+}
+
+/// The authors' Tierney-Mira kernel (eq. 6-7, Fig. 7): [`kelemen_first_stage`], then
+/// [`gaussian_timid_stage`] on the streams of `streams` after a rejected small step. Its ratio
+/// keeps `Q1(y | z) / Q1(y | x)`, which vanishes wherever a coordinate of `y - z` leaves
+/// Kelemen's support (the vanishing acceptance of section 4.3, what the paper shows).
 #[must_use]
 pub fn tierney_mira_kernel<C>(
+    layout: PairLayout,
+    p_large: f64,
+    streams: SecondStageStreams<C>,
+    params: PerCoordinateParams,
+) -> DelayedRejection<KelemenFirstStage, ByState<GaussianTimidStage, C>> {
+    DelayedRejection::tierney_mira(
+        kelemen_first_stage(layout, p_large, params),
+        streams.stages(|mask| gaussian_timid_stage(layout, mask, params)),
+    )
+    .with_symmetric_second_stage()
+    .second_stage_after_small_steps()
+}
+
+/// The authors' Green-Mira kernel (eq. 12-14, Fig. 7): the stages of [`tierney_mira_kernel`]
+/// with the ghost `y* = z - (y - x)` on every stream of `layout` ([`LayoutGhost`]).
+#[must_use]
+pub fn green_mira_kernel<C>(
+    layout: PairLayout,
+    p_large: f64,
+    streams: SecondStageStreams<C>,
+    params: PerCoordinateParams,
+) -> DelayedRejection<KelemenFirstStage, ByState<GaussianTimidStage, C>, LayoutGhost> {
+    DelayedRejection::green_mira(
+        kelemen_first_stage(layout, p_large, params),
+        streams.stages(|mask| gaussian_timid_stage(layout, mask, params)),
+        LayoutGhost {
+            layout,
+            stream_mask: ALL_STREAMS,
+        },
+    )
+    .with_symmetric_second_stage()
+    .second_stage_after_small_steps()
+}
+
+/// The pairwise Tierney-Mira kernel (eq. 6-7): [`first_stage`], then [`timid_stage`] on the
+/// streams of `streams` after a rejected small step.
+#[must_use]
+pub fn pairwise_tierney_mira_kernel<C>(
     layout: PairLayout,
     p_large: f64,
     streams: SecondStageStreams<C>,
@@ -238,10 +354,10 @@ pub fn tierney_mira_kernel<C>(
     .second_stage_after_small_steps()
 }
 
-/// The Green-Mira kernel (eq. 12-14): the stages of [`tierney_mira_kernel`] with the ghost
-/// `y* = z - (y - x)` on every stream of `layout` ([`LayoutGhost`]).
+/// The pairwise Green-Mira kernel (eq. 12-14): the stages of [`pairwise_tierney_mira_kernel`]
+/// with the ghost `y* = z - (y - x)` on every stream of `layout` ([`LayoutGhost`]).
 #[must_use]
-pub fn green_mira_kernel<C>(
+pub fn pairwise_green_mira_kernel<C>(
     layout: PairLayout,
     p_large: f64,
     streams: SecondStageStreams<C>,
@@ -309,8 +425,17 @@ mod tests {
     fn kernels_skip_the_second_stage_after_large_steps() {
         let layout = PairLayout::single_stream(4);
         let o = orbital_kernel(layout, 0.3, SecondStageStreams::all());
-        let t = tierney_mira_kernel(layout, 0.3, SecondStageStreams::all());
-        let g = green_mira_kernel(layout, 0.3, SecondStageStreams::all());
+        let t = pairwise_tierney_mira_kernel(layout, 0.3, SecondStageStreams::all());
+        let g = pairwise_green_mira_kernel(layout, 0.3, SecondStageStreams::all());
+        let params = PerCoordinateParams::rioux_lavoie2020();
+        let at = tierney_mira_kernel(layout, 0.3, SecondStageStreams::all(), params);
+        let ag = green_mira_kernel(layout, 0.3, SecondStageStreams::all(), params);
+        assert!(at.runs_second_stage_after(0) && !at.runs_second_stage_after(1));
+        assert!(ag.runs_second_stage_after(0) && !ag.runs_second_stage_after(1));
+        assert!(at.has_symmetric_second_stage() && ag.has_symmetric_second_stage());
+        assert_eq!(params.second_sigma, 0.1 / 64.0);
+        assert_eq!(params.kelemen, KelemenParams::kelemen2002());
+        assert_eq!(at.first.p_large(), 0.3);
         assert!(o.runs_second_stage_after(0) && !o.runs_second_stage_after(1));
         assert!(t.runs_second_stage_after(0) && !t.runs_second_stage_after(1));
         assert!(g.runs_second_stage_after(0) && !g.runs_second_stage_after(1));

@@ -36,6 +36,7 @@ pub mod noise;
 mod on_layout;
 pub mod orbital;
 mod pairwise;
+mod per_coordinate;
 mod proposal;
 mod raster;
 mod state;

@@ -86,7 +86,7 @@ impl<P> OnLayout<P> {
     }
 
     /// Makes `candidate` a copy of `parent` with the identity pending mutation and `key`.
-    fn begin_candidate(&self, parent: &PssState, candidate: &mut PssState, key: u64) {
+    pub(crate) fn begin_candidate(&self, parent: &PssState, candidate: &mut PssState, key: u64) {
         candidate.clone_from(parent);
         candidate.set_pending(
             Pending::Small {
@@ -100,7 +100,7 @@ impl<P> OnLayout<P> {
 
 /// The stored value of coordinate `i`, or NaN beyond the stored length (every comparison
 /// with NaN fails, so densities come out `-inf`).
-fn stored(x: &PssState, i: usize) -> f64 {
+pub(crate) fn stored(x: &PssState, i: usize) -> f64 {
     x.raw_values().get(i).copied().unwrap_or(f64::NAN)
 }
 
@@ -211,22 +211,24 @@ impl ConditionalProposal<PssState> for OnLayout<Orbital> {
 }
 
 /// The first stage of DRMLT on PSSMLT (paper section 5.1.1, the authors' code): a large step
-/// with probability `p_large`, else the pairwise polar Kelemen step on `layout`. Component 0
-/// is the pairwise step, component 1 the large step; both symmetric; `p_large` tunable
+/// with probability `p_large`, else a layout step `small` — by default the pairwise polar
+/// Kelemen step on `layout` (the orbital variant's), or the per-coordinate 1-D step of the
+/// authors' Tierney-Mira and Green-Mira ([`OnLayout`]`<`[`SmallMutation`]`>`). Component 0
+/// is the layout step, component 1 the large step; both symmetric; `p_large` tunable
 /// (automatic large-step control).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PairwiseMltProposal {
-    /// The pairwise step.
-    pub small: OnLayout<PairwiseKelemen>,
+pub struct PairwiseMltProposal<S = OnLayout<PairwiseKelemen>> {
+    /// The layout step.
+    pub small: S,
     p_large: f64,
 }
 
-impl PairwiseMltProposal {
+impl<S> PairwiseMltProposal<S> {
     /// The mixture with large-step probability `p_large` in `[0, 1]`.
     ///
     /// # Errors
     /// [`PssError::InvalidParameter`] if `p_large` is outside `[0, 1]`.
-    pub fn new(small: OnLayout<PairwiseKelemen>, p_large: f64) -> Result<Self, PssError> {
+    pub fn new(small: S, p_large: f64) -> Result<Self, PssError> {
         if !(0.0..=1.0).contains(&p_large) {
             return Err(PssError::InvalidParameter {
                 name: "p_large",
@@ -244,7 +246,7 @@ impl PairwiseMltProposal {
     }
 }
 
-impl Proposal<PssState> for PairwiseMltProposal {
+impl<S: Proposal<PssState>> Proposal<PssState> for PairwiseMltProposal<S> {
     fn propose<R: Rng + ?Sized>(&self, x: &PssState, y: &mut PssState, rng: &mut R) -> Proposed {
         if rng.random::<f64>() < self.p_large {
             LargeStep.propose(x, y, rng).with_component(1)
@@ -275,7 +277,7 @@ impl Proposal<PssState> for PairwiseMltProposal {
     }
 }
 
-impl LargeStepTunable for PairwiseMltProposal {
+impl<S> LargeStepTunable for PairwiseMltProposal<S> {
     fn large_step_probability(&self) -> f64 {
         self.p_large
     }

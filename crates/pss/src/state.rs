@@ -145,6 +145,46 @@ impl mcmc_core::Point for PssState {
             self.stamps[index] = self.iteration[index % self.streams];
         }
     }
+
+    /// A candidate of a lazy small step (a [`Pending::Small`] on some stream) extends itself
+    /// to what is known of its parent: from the parent, the coordinates it stores beyond the
+    /// candidate's length (with their stamps); from a sibling, the parent values its
+    /// evaluation drew there (its observation log). The candidate is one step ahead of those,
+    /// as of every coordinate it inherited; it then brings every stored coordinate up to date
+    /// ([`PssState::materialize`]): the eager candidate, as far as the parent is known. Other
+    /// candidates (large steps, the identity-pending candidates of the layout stages, MALA's)
+    /// write the coordinates their densities read when they are proposed and are left as
+    /// they are.
+    fn catch_up_with(&mut self, known: &Self) {
+        let Pending::Small { stream_mask, .. } = self.pending else {
+            return;
+        };
+        if stream_mask == 0 || known.streams != self.streams {
+            return;
+        }
+        let len = self.values.len();
+        if known.key == self.parent_key {
+            if known.values.len() > len {
+                self.values.extend_from_slice(&known.values[len..]);
+                self.stamps.extend_from_slice(&known.stamps[len..]);
+            }
+        } else if known.parent_key == self.parent_key {
+            for &(index, value) in &known.observed {
+                if index < len {
+                    continue;
+                }
+                if index >= self.values.len() {
+                    self.values.resize(index + 1, 0.0);
+                    self.stamps.resize(index + 1, NEVER);
+                }
+                let stream = index % self.streams;
+                let mutated = stream_mask & (1 << stream) != 0;
+                self.values[index] = value;
+                self.stamps[index] = self.iteration[stream] - u64::from(mutated);
+            }
+        }
+        self.materialize();
+    }
 }
 
 impl PssState {

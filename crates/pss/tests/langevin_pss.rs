@@ -2,8 +2,11 @@
 //! `mcmc_core::langevin`): pairwise flow balance and stationarity from exact starts on a
 //! wrapped mixture with mass across the torus seams, and stationarity on targets whose read
 //! set depends on the state (stripes; a roulette path of varying length), where a candidate
-//! that reads a different set of coordinates is rejected. Negative control: the move density
-//! without the wrap-around (the unwrapped Gaussian of the displacement) fails at the seam.
+//! that reads a different set of coordinates is rejected — by both stages of
+//! cheap-then-expensive too. Negative controls: the move density without the wrap-around (the
+//! unwrapped Gaussian of the displacement) fails at the seam; cheap-then-expensive over a space
+//! that ignores read-set changes (what its first stage did before it checked them) fails on
+//! the stripes.
 //!
 //! Statistics: each stationarity test must pass at the Sidak level for
 //! [`STATIONARITY_TESTS`] tests (false-failure probability 0.01 for the file); the negative
@@ -13,7 +16,9 @@ use mcmc_core::langevin::{
     CheapThenExpensive, Hybrid, Langevin, LangevinParams, LangevinSpace, Online, Plain,
     ProposalGaussian,
 };
-use mcmc_core::testing::{assert_path_balance, sidak_alpha, PairwiseParams, StationarityParams};
+use mcmc_core::testing::{
+    assert_path_balance, sidak_alpha, stationarity_test, PairwiseParams, StationarityParams,
+};
 use mcmc_core::toy::{wrap, TorusMixture};
 use mcmc_core::{Chain, Kernel, NoAdaptation};
 use proptest::prelude::*;
@@ -22,7 +27,7 @@ use pss::testing::{pss_stationarity_test, ExactPssTarget, OnPss, RoulettePath, S
 use pss::{LargeStep, PssState};
 use rand::SeedableRng;
 
-const STATIONARITY_TESTS: usize = 8;
+const STATIONARITY_TESTS: usize = 10;
 const STARTS: usize = 10_000;
 const STEPS: u64 = 20;
 
@@ -193,6 +198,88 @@ fn negative_control_unwrapped_density_fails_at_the_seam() {
     let kernel = Langevin::new(params(0.01), Plain, Unwrapped).unwrap();
     let report = pss_stationarity_test(&target, &kernel, &StationarityParams::new(STARTS, 100, 9));
     eprintln!("negative control (unwrapped density): {report}");
+    assert!(
+        report.rejects(sidak_alpha(0.01, STATIONARITY_TESTS)),
+        "{report}"
+    );
+}
+
+/// Cheap-then-expensive as the renderer builds it on MMLT: a small first-stage walk, a
+/// MALA second stage, large steps with probability 0.1.
+fn cheap_then_expensive<Sp>(space: Sp) -> impl Kernel<Stripes> + Clone
+where
+    Sp: LangevinSpace<PssState> + Clone,
+{
+    let p = LangevinParams {
+        epsilon: 0.001,
+        ..LangevinParams::luan2020()
+    };
+    CheapThenExpensive::new(p, 0.03, Plain, space)
+        .unwrap()
+        .with_large_step(LargeStep, 0.1)
+        .unwrap()
+}
+
+/// Steps per start of the cheap-then-expensive read-set tests (long enough for a first stage
+/// that crosses stripe edges to move the stripe share visibly).
+const CTE_STEPS: u64 = 100;
+
+/// Exact starts of the cheap-then-expensive read-set tests.
+const CTE_STARTS: usize = 10_000;
+
+/// Stationarity from exact starts with a chi-square of one degree of freedom on the share of
+/// states in the stripes ([`Stripes::stripe_bins`]).
+fn stripe_share_test<K: Kernel<Stripes> + Clone>(
+    target: &Stripes,
+    kernel: &K,
+    seed: u64,
+) -> mcmc_core::testing::ChiSquareReport {
+    stationarity_test(
+        target,
+        kernel,
+        |rng| target.sample_exact(rng),
+        &target.stripe_bins(),
+        &StationarityParams::new(CTE_STARTS, CTE_STEPS, seed),
+    )
+}
+
+#[test]
+fn cheap_then_expensive_keeps_the_read_set() {
+    let target = Stripes::narrow();
+    let report = stripe_share_test(&target, &cheap_then_expensive(PssCoordinates), 10);
+    eprintln!("stripes / cheap-then-expensive + large step: {report}");
+    report.assert_passes("stripes / cheap-then-expensive", STATIONARITY_TESTS);
+}
+
+/// PSS coordinates that report every candidate as keeping the read set: the first stage of
+/// cheap-then-expensive then accepts moves into and out of the stripes (the second stage still
+/// rejects them, through its dimension check), which is the kernel before the fix.
+#[derive(Clone, Copy, Debug)]
+struct IgnoresReadSet;
+
+impl LangevinSpace<PssState> for IgnoresReadSet {
+    fn read(&self, x: &PssState, out: &mut Vec<f64>) {
+        PssCoordinates.read(x, out);
+    }
+    fn write(&self, x: &PssState, coords: &[f64], y: &mut PssState) -> bool {
+        PssCoordinates.write(x, coords, y)
+    }
+    fn log_q(&self, q: &ProposalGaussian, from: &[f64], to: &[f64]) -> f64 {
+        PssCoordinates.log_q(q, from, to)
+    }
+    fn wraps(&self) -> bool {
+        true
+    }
+    fn ghost(&self, x: &[f64], y: &[f64], z: &[f64], out: &mut Vec<f64>) {
+        PssCoordinates.ghost(x, y, z, out);
+    }
+}
+
+#[test]
+fn negative_control_cheap_then_expensive_across_read_sets_fails() {
+    let target = Stripes::narrow();
+    let report = stripe_share_test(&target, &cheap_then_expensive(IgnoresReadSet), 11);
+    eprintln!("negative control (first stage across read sets): {report}");
     assert!(
         report.rejects(sidak_alpha(0.01, STATIONARITY_TESTS)),
         "{report}"

@@ -87,6 +87,67 @@ fn drmlt_cheap_then_expensive_is_bit_identical() {
     assert!(bits(&run(&scene, &other)) != bits(&reference));
 }
 
+/// The delayed-rejection rules over both stage families, on both samplers: the authors'
+/// Tierney-Mira and Green-Mira (1-D Kelemen, then Gaussian 0.1/64) and the pairwise ones.
+#[test]
+fn drmlt_tierney_mira_and_green_mira_are_bit_identical() {
+    use render::mlt::dr::{DrBase, DrVariant};
+    let scene = Scene::cornell_box(24, 16);
+    for variant in [
+        DrVariant::TierneyMira,
+        DrVariant::GreenMira,
+        DrVariant::TierneyMiraPairwise,
+        DrVariant::GreenMiraPairwise,
+    ] {
+        for base in [DrBase::Pssmlt, DrBase::Mmlt] {
+            let with = |threads| {
+                let method = DrmltSettings::rioux_lavoie2020_with(variant, base);
+                with_method(method.into(), 24, 16, threads, 13)
+            };
+            let reference = run(&scene, &with(1));
+            assert!(reference.mean_luminance() > 0.0, "{variant:?} {base:?}");
+            assert!(
+                bits(&run(&scene, &with(2))) == bits(&reference),
+                "{variant:?} {base:?}: 2 threads differ from 1"
+            );
+            let mut other = with(1);
+            other.seed = 14;
+            assert!(
+                bits(&run(&scene, &other)) != bits(&reference),
+                "{variant:?} {base:?}: seed ignored"
+            );
+        }
+    }
+}
+
+/// Delayed rejection with the large-step MIS estimator (`--large-step-mis on`): 1 and 2
+/// threads give the same image, and the option changes the image.
+#[test]
+fn drmlt_large_step_mis_is_bit_identical() {
+    use render::mlt::dr::{DrBase, DrVariant};
+    let scene = Scene::cornell_box(24, 16);
+    for (variant, base) in [
+        (DrVariant::Orbital, DrBase::Pssmlt),
+        (DrVariant::TierneyMira, DrBase::Mmlt),
+    ] {
+        let with = |threads, mis| {
+            let mut method = DrmltSettings::rioux_lavoie2020_with(variant, base);
+            method.large_step_mis = mis;
+            with_method(method.into(), 24, 16, threads, 15)
+        };
+        let reference = run(&scene, &with(1, true));
+        assert!(reference.mean_luminance() > 0.0, "{variant:?} {base:?}");
+        assert!(
+            bits(&run(&scene, &with(2, true))) == bits(&reference),
+            "{variant:?} {base:?}: 2 threads differ from 1"
+        );
+        assert!(
+            bits(&run(&scene, &with(1, false))) != bits(&reference),
+            "{variant:?} {base:?}: the option has no effect"
+        );
+    }
+}
+
 /// PSSMLT and MMLT with the large-step MIS estimator (`--large-step-mis on`), under fixed and
 /// automatic large-step probability: 1, 2 and 3 threads give the same image.
 #[test]

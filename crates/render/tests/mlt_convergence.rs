@@ -53,8 +53,8 @@ use render::image::Image;
 use render::mlt::dr::{self, DrBase, DrVariant};
 use render::mlt::mala::{self, MalaConfig, MalaVariant};
 use render::mlt::{
-    LargeStepMode, MltBudget, MltDriver, MltOutput, MltSettings, MmltTarget, PerChain,
-    PssmltTarget, PATH_STREAMS,
+    LargeStepMode, MltBudget, MltDriver, MltEstimator, MltOutput, MltSettings, MmltTarget,
+    PerChain, PssmltTarget, PATH_STREAMS,
 };
 use render::scene::{CameraSpec, Material, Mesh, Scene};
 use render::session::NoProgress;
@@ -70,11 +70,14 @@ const BLOCKS: usize = 4;
 /// Max depth of the enclosure renders.
 const ENCLOSURE_DEPTH: u32 = 3;
 /// Null-hypothesis comparisons in this file: the enclosure's image mean (PSSMLT, MMLT, the
-/// four DR configurations, the four MALA variants and cheap-then-expensive) and MMLT's
-/// per-depth bootstrap means (depths `0..=ENCLOSURE_DEPTH`); the Cornell box's image mean and
-/// blocks (PSSMLT, MMLT, four DR configurations, four MALA variants, cheap-then-expensive).
+/// seven DR configurations — orbital, the authors' and the pairwise Tierney-Mira and
+/// Green-Mira on PSSMLT, orbital on MMLT, orbital with large-step MIS — the four MALA
+/// variants and cheap-then-expensive)
+/// and MMLT's per-depth bootstrap means (depths `0..=ENCLOSURE_DEPTH`); the Cornell box's
+/// image mean and blocks (PSSMLT, MMLT, six DR configurations, four MALA variants,
+/// cheap-then-expensive).
 const N_COMPARISONS: usize =
-    (2 + 4 + 5) + (ENCLOSURE_DEPTH as usize + 1) + 11 * (1 + BLOCKS * BLOCKS);
+    (2 + 7 + 5) + (ENCLOSURE_DEPTH as usize + 1) + 13 * (1 + BLOCKS * BLOCKS);
 
 // ---------------------------------------------------------------------------------------------
 // Student's t (`common::stats`).
@@ -116,6 +119,8 @@ enum Method {
     Dr(DrVariant),
     /// Delayed-rejection MLT over MMLT, orbital second stage on the camera subpath.
     DrMmlt,
+    /// Orbital delayed rejection over PSSMLT with the large-step MIS estimator.
+    DrMis,
     /// Langevin MLT (`render::mlt::mala`) with the given adaptation.
     Mala(MalaVariant),
     /// Delayed rejection, cheap (Gaussian) then expensive (MALA), on MMLT.
@@ -176,6 +181,16 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
                     &NoProgress,
                     &cancel,
                 ),
+                DrVariant::TierneyMiraPairwise => MltDriver::new(&targets, settings).run(
+                    |p| dr::pairwise_tierney_mira_kernel(layout, base, p, 0),
+                    &NoProgress,
+                    &cancel,
+                ),
+                DrVariant::GreenMiraPairwise => MltDriver::new(&targets, settings).run(
+                    |p| dr::pairwise_green_mira_kernel(layout, base, p, 0),
+                    &NoProgress,
+                    &cancel,
+                ),
                 DrVariant::CheapThenExpensive => unreachable!("Method::CheapThenExpensive"),
             }
         }
@@ -202,6 +217,20 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             &NoProgress,
             &cancel,
         ),
+        Method::DrMis => {
+            let targets = [PssmltTarget::new(scene, params, w, h)];
+            let layout = dr::dr_layout(params.max_depth);
+            MltDriver::new(&targets, settings)
+                .estimator(MltEstimator {
+                    large_step_mis: true,
+                    ..MltEstimator::plain()
+                })
+                .run(
+                    |p| dr::orbital_kernel(layout, DrBase::Pssmlt, p, 0),
+                    &NoProgress,
+                    &cancel,
+                )
+        }
         Method::DrMmlt => {
             let layout = dr::dr_layout(params.max_depth);
             MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings).run(
@@ -294,6 +323,9 @@ fn drmlt_variants_match_the_analytic_enclosure() {
     enclosure_case(Method::Dr(DrVariant::TierneyMira), 6000);
     enclosure_case(Method::Dr(DrVariant::GreenMira), 7000);
     enclosure_case(Method::DrMmlt, 8000);
+    enclosure_case(Method::Dr(DrVariant::TierneyMiraPairwise), 6500);
+    enclosure_case(Method::Dr(DrVariant::GreenMiraPairwise), 7500);
+    enclosure_case(Method::DrMis, 8500);
 }
 
 /// MMLT's per-depth targets: in the enclosure every path of depth `d` carries `Le rho^d`, and
@@ -459,10 +491,19 @@ fn drmlt_orbital_converges_to_bdpt_on_the_cornell_box() {
     cornell_case(Method::Dr(DrVariant::Orbital), 5000, PSSMLT_MPP);
 }
 
+/// The authors' Tierney-Mira and Green-Mira (1-D Kelemen first stage, Gaussian 0.1/64
+/// second stage).
 #[test]
 fn drmlt_tierney_mira_and_green_mira_converge_to_bdpt_on_the_cornell_box() {
     cornell_case(Method::Dr(DrVariant::TierneyMira), 6000, PSSMLT_MPP);
     cornell_case(Method::Dr(DrVariant::GreenMira), 7000, PSSMLT_MPP);
+}
+
+/// Tierney-Mira and Green-Mira over the pairwise stages.
+#[test]
+fn drmlt_pairwise_tierney_mira_and_green_mira_converge_to_bdpt_on_the_cornell_box() {
+    cornell_case(Method::Dr(DrVariant::TierneyMiraPairwise), 6500, PSSMLT_MPP);
+    cornell_case(Method::Dr(DrVariant::GreenMiraPairwise), 7500, PSSMLT_MPP);
 }
 
 #[test]

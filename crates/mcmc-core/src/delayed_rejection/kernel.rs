@@ -54,6 +54,14 @@ use crate::McmcError;
 /// fixed dimension before the second stage, as the reference implementation does, draws
 /// nothing and needs nothing).
 ///
+/// Under Tierney & Mira's and Green & Mira's rules the second stage's ratio reads the
+/// first-stage density `Q1` of whole states (`Q1(y | x)`, `Q1(y* | z)`), and a lazily
+/// mutated candidate stores stale values where its evaluation did not read. The kernel
+/// therefore calls [`Point::catch_up_with`]`(y, x)` before absorbing `y`, and after
+/// evaluating `z`, `catch_up_with(z, x)` then `catch_up_with(y, z)` (`y` extends to the
+/// coordinates `z` drew of `x`): the densities see the eager candidates. States that are
+/// fully defined when proposed (the default) are not touched.
+///
 /// # Statistics
 /// [`StepInfo`]: `component` is `j`; `accept_prob = [a1, a2]` (`a2 = 0` when the second stage
 /// did not run); `candidate_log_density = [log pi(y), log pi(z)]`; `stages_tried` is 1 or 2;
@@ -100,6 +108,9 @@ pub struct DelayedRejection<P1, P2, A = NoGhost> {
     /// Bit `j` set: the second stage may follow a rejected candidate of component `j`.
     second_stage_set: u32,
     symmetric_second_stage: bool,
+    /// Whether lazily mutated candidates are brought up to date before the densities of
+    /// Tierney-Mira and Green-Mira read them (always, except in negative controls).
+    catch_up: bool,
 }
 
 /// Every component in the second-stage set.
@@ -128,6 +139,7 @@ impl<P1, P2, A> DelayedRejection<P1, P2, A> {
             rule,
             second_stage_set: ALL_COMPONENTS,
             symmetric_second_stage: false,
+            catch_up: true,
         }
     }
 
@@ -181,6 +193,17 @@ impl<P1, P2, A> DelayedRejection<P1, P2, A> {
     #[must_use]
     pub fn with_symmetric_second_stage(mut self) -> Self {
         self.symmetric_second_stage = true;
+        self
+    }
+
+    /// The kernel as it was before it brought lazy candidates up to date: the Tierney-Mira
+    /// and Green-Mira densities then read the stale stored coordinates of lazily mutated
+    /// candidates. Biased on lazy states; only for negative controls.
+    #[cfg(feature = "testing")]
+    #[doc(hidden)]
+    #[must_use]
+    pub fn with_stale_densities(mut self) -> Self {
+        self.catch_up = false;
         self
     }
 
@@ -321,6 +344,10 @@ where
             observer.step(&info);
             return info;
         }
+        let whole_states = self.catch_up && !matches!(self.rule, DrRule::Orbital);
+        if whole_states {
+            y.state.catch_up_with(&current.state);
+        }
         current.state.absorb_rejected(&y.state);
 
         // Stage 2: z ~ Q2(. | x, y), accepted with the rule's a2.
@@ -338,6 +365,10 @@ where
             if is_non_finite(z.log_density) {
                 info.non_finite = true;
             } else if z.log_density > f64::NEG_INFINITY {
+                if whole_states {
+                    z.state.catch_up_with(&current.state);
+                    y.state.catch_up_with(&z.state);
+                }
                 let ln_a2 = match (&self.rule, rest.first_mut()) {
                     (DrRule::GreenMira(arithmetic), Some(ghost)) => {
                         arithmetic.ghost(&current.state, &y.state, &z.state, &mut ghost.state);

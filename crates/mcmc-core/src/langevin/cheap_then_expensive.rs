@@ -31,6 +31,14 @@ use crate::McmcError;
 /// `g(z)`). The gradient is evaluated only at second-stage candidates and cached for the
 /// current state; `y` and `y*` cost one plain evaluation each.
 ///
+/// # Read sets
+/// Both stages move the coordinates the current state's evaluation read
+/// ([`LangevinSpace::read`]), and both reject a candidate whose evaluation read a different
+/// set ([`LangevinSpace::same_layout`]): the first stage in `a1(x, y)` and in the reverse
+/// `a1(z, y*)`, the second stage in `a2`. The kernel is then exact on each set of states with
+/// one read set, as MALA is (docs/methods/mala.md, "Read sets"); a first stage that accepted
+/// a change of read set would pair a walk in one dimension with its reverse in another.
+///
 /// Splatting is the unbiased three-point scheme of [`crate::DelayedRejection`]; large steps
 /// (component 1, probability `p_large`) never run a second stage. The adaptation advances
 /// after each step whose second stage ran, with the gradient at `x`.
@@ -156,6 +164,20 @@ fn isotropic(params: &LangevinParams, sigma: f64, d: usize, out: &mut ProposalGa
     out.set_diagonal(&p, &ones, &zeros);
 }
 
+/// The first stage's acceptance probability for the evaluated move `x -> y`: the MH
+/// ratio of the symmetric walk, and 0 when `y`'s evaluation read a different set of
+/// coordinates than `x`'s ([`LangevinSpace::same_layout`]). The walk moves exactly the
+/// coordinates `x` read, so a move that changes the read set has no reverse move of the
+/// same kind: accepting it would break detailed balance, as for MALA (docs/methods/mala.md,
+/// "Read sets"). Both stages are thus exact on each set of states with one read set.
+fn first_stage_accept<S, Sp: LangevinSpace<S>>(space: &Sp, x: (&S, f64), y: (&S, f64)) -> f64 {
+    if space.same_layout(x.0, y.0) {
+        mh_accept_prob(x.1, y.1, 0.0)
+    } else {
+        0.0
+    }
+}
+
 fn non_finite(ld: f64) -> bool {
     ld.is_nan() || ld == f64::INFINITY
 }
@@ -168,7 +190,7 @@ impl<A: Adaptation, Sp, L> CheapThenExpensive<A, Sp, L> {
         adaptation: &mut A,
         x: (&S, f64, &[f64]),
         z: (&S, f64, &[f64]),
-        ystar_ld: f64,
+        ystar: (&S, f64),
         ln_one_minus_a1: f64,
         fwd: &mut ProposalGaussian,
         rev: &mut ProposalGaussian,
@@ -187,7 +209,7 @@ impl<A: Adaptation, Sp, L> CheapThenExpensive<A, Sp, L> {
         }
         adaptation.gaussian(&self.params, &u, x.2, fwd);
         adaptation.gaussian(&self.params, &v, z.2, rev);
-        let a1_rev = mh_accept_prob(z.1, ystar_ld, 0.0);
+        let a1_rev = first_stage_accept(&self.space, (z.0, z.1), ystar);
         let num = z.1 + ln_one_minus(a1_rev) + self.space.log_q(rev, &v, &u);
         let den = x.1 + ln_one_minus_a1 + self.space.log_q(fwd, &u, &v);
         ln_accept_from_ratio(num, den)
@@ -281,7 +303,11 @@ where
             if non_finite(y.log_density) {
                 info.non_finite = true;
             } else {
-                a1 = mh_accept_prob(current.log_density, y.log_density, 0.0);
+                a1 = first_stage_accept(
+                    &self.space,
+                    (&current.state, current.log_density),
+                    (&y.state, y.log_density),
+                );
             }
         }
         info.accept_prob[0] = a1;
@@ -363,7 +389,11 @@ where
                     {
                         self.adaptation
                             .gaussian(&self.params, cz, &self.grad_z, &mut self.reverse);
-                        let a1_rev = mh_accept_prob(z.log_density, ghost.log_density, 0.0);
+                        let a1_rev = first_stage_accept(
+                            &self.space,
+                            (&z.state, z.log_density),
+                            (&ghost.state, ghost.log_density),
+                        );
                         let num = z.log_density
                             + ln_one_minus(a1_rev)
                             + self.space.log_q(&self.reverse, cz, &self.current.coords);
@@ -418,7 +448,7 @@ where
         match path {
             [x, y] => {
                 let mut terms = vec![];
-                if p_local > 0.0 {
+                if p_local > 0.0 && self.space.same_layout(&x.state, &y.state) {
                     terms.push(
                         p_local.ln()
                             + x.log_density
@@ -449,15 +479,18 @@ where
                 let ghost = Sample::evaluate(target, ghost);
                 let gx = gradient_of(target, x, &self.params);
                 let gz = gradient_of(target, z, &self.params);
-                let ln_one_minus_a1 =
-                    ln_one_minus(mh_accept_prob(x.log_density, y.log_density, 0.0));
+                let ln_one_minus_a1 = ln_one_minus(first_stage_accept(
+                    &self.space,
+                    (&x.state, x.log_density),
+                    (&y.state, y.log_density),
+                ));
                 let mut adaptation = self.adaptation.clone();
                 let (mut f, mut r) = (ProposalGaussian::default(), ProposalGaussian::default());
                 let ln_a2 = self.ln_a2(
                     &mut adaptation,
                     (&x.state, x.log_density, &gx),
                     (&z.state, z.log_density, &gz),
-                    ghost.log_density,
+                    (&ghost.state, ghost.log_density),
                     ln_one_minus_a1,
                     &mut f,
                     &mut r,

@@ -63,9 +63,30 @@
 //! is never more sensitive to the bootstrap's error, and not at all where large steps
 //! dominate (`m` near 0).
 //!
-//! Requirements: a single-stage kernel ([`Kernel::stages`] = 1, e.g. [`crate::Mh`]) that
-//! leaves its rejected candidate in `scratch[0]` and swaps an accepted one into `current`
-//! (as [`crate::Mh`] does), and whose large step (named by
+//! # Two-stage kernels
+//! The derivation uses one property of the kernel's splats: the observer contract
+//! `E[sum_i w_i k(s_i) | x] = E[k(X') | x]` for every function `k` (the splats are expected
+//! values of the next state). Weighting each splat by `m(s_i)` is the contract for
+//! `k = m h`, so its expectation from `x ~ pi` is `E_pi[m h]` whatever produced the splats.
+//! Delayed rejection's three-point splats ([`crate::DelayedRejection`]: `y` with `a1`, then
+//! `z` with `a2` and `x` with `1 - a2` after a second stage, or `x` with `1 - a1`; the same in
+//! [`crate::langevin::CheapThenExpensive`]) keep that contract, so
+//!
+//! ```text
+//! E[splats of one step] = E_pi[m h] + p E_q[m h (y)] = E_pi[h]
+//! ```
+//!
+//! for them too, with the extra splat of the large-step candidate `y` as for MH: a large
+//! step is component `j` of the first stage, drawn with probability `p` from the density
+//! `q`, independently of `x`, and `y` is splatted whatever happens next (accepted at stage 1,
+//! rejected, or rejected and followed by a second stage when the kernel runs one after large
+//! steps). The second-stage candidate `z` is a Metropolis sample (its weight is part of the
+//! contract), not a technique of its own: it gets `a2 m(z)`.
+//!
+//! Requirements: a kernel whose splats keep the observer contract, that leaves the
+//! first-stage candidate in `scratch[0]` unless it is accepted at stage 1 (then it is in
+//! `current`), as [`crate::Mh`], [`crate::DelayedRejection`] and
+//! [`crate::langevin::CheapThenExpensive`] do, and whose large step (named by
 //! [`LargeStepTunable::is_large_step`]) is an independent proposal of constant density
 //! `q` on the target's support.
 
@@ -76,7 +97,7 @@ use crate::kernel::{Kernel, Observer, StepInfo};
 use crate::target::{Sample, SampleOf, Target};
 use crate::tunable::LargeStepTunable;
 
-/// Wraps a single-stage kernel with a large step and splats with Kelemen et al. 2002's
+/// Wraps a kernel with a large step (single-stage or two-stage) and splats with Kelemen et al. 2002's
 /// multiple-importance combination of the large-step samples and the Metropolis samples
 /// (section 4; see the module docs for the weights and the derivation). Disabled, it is
 /// the kernel itself (one branch per step).
@@ -200,11 +221,6 @@ where
     R: Rng + ?Sized,
     O: Observer<T::State, T::Payload> + ?Sized,
 {
-    debug_assert_eq!(
-        kernel.stages(),
-        1,
-        "LargeStepMis needs a single-stage kernel"
-    );
     let info = {
         let mut mis = MisObserver {
             inner: &mut *observer,
@@ -214,7 +230,8 @@ where
     };
     let log_fy = info.candidate_log_density[0];
     if kernel.is_large_step(info.component) && log_fy.is_finite() {
-        // The candidate: swapped into `current` if accepted, still in `scratch[0]` if not.
+        // The candidate: swapped into `current` if accepted at stage 1, still in
+        // `scratch[0]` otherwise (a second stage, if any, proposes into `scratch[1]`).
         let y: &SampleOf<T> = if info.accepted_stage == 1 {
             current
         } else {

@@ -388,6 +388,10 @@ impl<T: Target, K: Kernel<T> + LargeStepTunable> Kernel<T> for MisWithoutLargeSt
         mis_step(&mut self.0, 0.0, target, current, scratch, rng, observer)
     }
 
+    fn stages(&self) -> usize {
+        self.0.stages()
+    }
+
     fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {
         self.0.log_flow(target, path)
     }
@@ -425,6 +429,10 @@ impl<T: Target, K: Kernel<T> + LargeStepTunable> Kernel<T> for MisWithStaleProba
     {
         let c = self.b_q * self.p_weights;
         mis_step(&mut self.kernel, c, target, current, scratch, rng, observer)
+    }
+
+    fn stages(&self) -> usize {
+        self.kernel.stages()
     }
 
     fn log_flow(&self, target: &T, path: &[SampleOf<T>]) -> f64 {

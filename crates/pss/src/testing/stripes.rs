@@ -114,6 +114,22 @@ impl Stripes {
         })
     }
 
+    /// 16 stripes and 16 bands (each of width 1/32), `high = 1.9`, `low = 0.1`: half the
+    /// mass in the stripes (`Z = 1`), 95% of it on the high bands. Stripes as narrow as the
+    /// usual small steps (sigma 0.03 to 0.05) put a stripe edge, where the read set changes,
+    /// within reach of most moves: the target of the two-stage kernels' read-set tests, with
+    /// [`Stripes::stripe_bins`] (a kernel that mishandles read-set changes moves the stripe
+    /// share away from one half).
+    #[must_use]
+    pub fn narrow() -> Self {
+        Self {
+            stripe_periods: 16,
+            band_periods: 16,
+            high: 1.9,
+            low: 0.1,
+        }
+    }
+
     /// The normalising constant `Z = 1/2 + (high + low) / 4`.
     #[must_use]
     pub fn normaliser(&self) -> f64 {
@@ -142,6 +158,21 @@ impl Stripes {
         } else {
             1
         }
+    }
+
+    /// Two bins, outside and inside the stripes (whether `u0` is in them), with exact
+    /// probabilities `1 / (2 Z)` and `(high + low) / (4 Z)`: a chi-square with one degree of
+    /// freedom on the share of states in the stripes, the statistic that a kernel mishandling
+    /// read-set changes moves (it moves mass across the stripe edges, where the read set
+    /// changes).
+    #[must_use]
+    pub fn stripe_bins(&self) -> PssBins {
+        let inside = 0.25 * (self.high + self.low) / self.normaliser();
+        let target = *self;
+        PssBins::new(vec![1.0 - inside, inside], move |x: &PssState| {
+            let mut x = x.clone();
+            usize::from(target.in_stripes(x.get(0)))
+        })
     }
 
     /// The unnormalised density inside the stripes at `u1`.
@@ -259,7 +290,11 @@ mod tests {
 
     #[test]
     fn density_is_normalised_and_matches_the_bins() {
-        for t in [Stripes::default(), Stripes::new(3, 2, 3.0, 0.5).unwrap()] {
+        for t in [
+            Stripes::default(),
+            Stripes::new(3, 2, 3.0, 0.5).unwrap(),
+            Stripes::narrow(),
+        ] {
             let bins = t.bins();
             let total: f64 = bins.probabilities().iter().sum();
             assert!((total - 1.0).abs() < 1e-12, "{total}");
@@ -279,6 +314,19 @@ mod tests {
             }
             for (m, p) in mass.iter().zip(bins.probabilities()) {
                 assert!((m - p).abs() < 1e-12, "{t:?}: {m} vs {p}");
+            }
+            // The stripe bins are sums of the fine bins.
+            let stripes = t.stripe_bins();
+            let mut share = [0.0; 2];
+            for (b, p) in bins.probabilities().iter().enumerate() {
+                share[usize::from(matches!((b / 2) % 4, 0 | 3))] += p;
+            }
+            for (s, p) in share.iter().zip(stripes.probabilities()) {
+                assert!((s - p).abs() < 1e-12, "{t:?}: {s} vs {p}");
+            }
+            for u0 in [0.0, 0.2, 0.3, 0.999] {
+                let x = PssState::from_values(&[u0, 0.3]);
+                assert_eq!(stripes.bin_of(&x), usize::from(t.in_stripes(u0)));
             }
         }
     }

@@ -17,7 +17,9 @@ use crate::bdpt::Roulette;
 use crate::error::RenderError;
 use crate::mlt::dr::{self, DrBase, DrVariant};
 use crate::mlt::mala::{self, MalaConfig};
-use crate::mlt::{self, MltDriver, MltOutput, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS};
+use crate::mlt::{
+    self, MltDriver, MltEstimator, MltOutput, MltSettings, MmltTarget, PssmltTarget, PATH_STREAMS,
+};
 use crate::scene::Scene;
 
 /// `drmlt`'s settings.
@@ -34,6 +36,12 @@ pub struct DrmltSettings {
     pub mala: MalaConfig,
     /// Russian roulette of the BDPT subpaths on PSSMLT (default from 3 bounces on).
     pub roulette: Roulette,
+    /// Combine the large-step samples with the two-stage estimator by multiple importance
+    /// sampling (Kelemen et al. 2002, section 4; [`MltEstimator::large_step_mis`]; the
+    /// weights of `mcmc_core::render_loop::LargeStepMis`, unbiased for delayed rejection's
+    /// splats). Default off, as in the authors' DRMLT (expected-value weights only). Not
+    /// with cheap-then-expensive.
+    pub large_step_mis: bool,
 }
 
 impl Default for DrmltSettings {
@@ -63,6 +71,7 @@ impl DrmltSettings {
             on,
             mala: super::MalaSettings::luan2020().config,
             roulette: Roulette { start: Some(3) },
+            large_step_mis: false,
         }
     }
 }
@@ -73,6 +82,13 @@ impl Method for DrmltSettings {
     }
 
     fn validate(&self, _common: &RenderSettings) -> Result<(), RenderError> {
+        if self.large_step_mis && self.variant == DrVariant::CheapThenExpensive {
+            return Err(RenderError::setting(
+                "large-step-mis",
+                "on with --dr-variant cheap-then-expensive",
+                "off for cheap-then-expensive (on for the other drmlt variants)",
+            ));
+        }
         self.chain.validate()
     }
 
@@ -109,11 +125,16 @@ impl Method for DrmltSettings {
         } else {
             let layout = dr::dr_layout(common.max_depth);
             notes.push(format!(
-                "delayed rejection: {} second stage on {}",
+                "delayed rejection: {} second stage on {}{}",
                 self.variant.name(),
                 match self.on {
                     DrBase::Pssmlt => "PSSMLT",
                     DrBase::Mmlt => "MMLT (camera subpath only)",
+                },
+                if self.large_step_mis {
+                    "; large-step MIS (Kelemen et al. 2002)"
+                } else {
+                    ""
                 }
             ));
             match self.on {
@@ -124,7 +145,7 @@ impl Method for DrmltSettings {
                         self.variant,
                         layout,
                         self.on,
-                        &mlt_settings,
+                        (&mlt_settings, self.large_step_mis),
                         run.progress,
                         run.cancel,
                     )
@@ -136,7 +157,7 @@ impl Method for DrmltSettings {
                         self.variant,
                         layout,
                         self.on,
-                        &mlt_settings,
+                        (&mlt_settings, self.large_step_mis),
                         run.progress,
                         run.cancel,
                     )
@@ -153,7 +174,7 @@ fn render_dr<T>(
     variant: DrVariant,
     layout: pss::PairLayout,
     base: DrBase,
-    mlt_settings: &MltSettings,
+    (mlt_settings, large_step_mis): (&MltSettings, bool),
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> MltOutput
@@ -161,28 +182,56 @@ where
     T: Target<State = pss::PssState>,
     T::Payload: SplatPayload,
 {
+    let estimator = MltEstimator {
+        large_step_mis,
+        ..MltEstimator::plain()
+    };
     match variant {
-        DrVariant::Orbital => MltDriver::new(targets, mlt_settings).run(
-            mlt::PerChain(|slot: ChainSlot, p| {
-                dr::orbital_kernel(layout, base, p, slot.target as u32)
-            }),
-            progress,
-            cancel,
-        ),
-        DrVariant::TierneyMira => MltDriver::new(targets, mlt_settings).run(
-            mlt::PerChain(|slot: ChainSlot, p| {
-                dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
-            }),
-            progress,
-            cancel,
-        ),
-        DrVariant::GreenMira => MltDriver::new(targets, mlt_settings).run(
-            mlt::PerChain(|slot: ChainSlot, p| {
-                dr::green_mira_kernel(layout, base, p, slot.target as u32)
-            }),
-            progress,
-            cancel,
-        ),
+        DrVariant::Orbital => MltDriver::new(targets, mlt_settings)
+            .estimator(estimator)
+            .run(
+                mlt::PerChain(|slot: ChainSlot, p| {
+                    dr::orbital_kernel(layout, base, p, slot.target as u32)
+                }),
+                progress,
+                cancel,
+            ),
+        DrVariant::TierneyMira => MltDriver::new(targets, mlt_settings)
+            .estimator(estimator)
+            .run(
+                mlt::PerChain(|slot: ChainSlot, p| {
+                    dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
+                }),
+                progress,
+                cancel,
+            ),
+        DrVariant::GreenMira => MltDriver::new(targets, mlt_settings)
+            .estimator(estimator)
+            .run(
+                mlt::PerChain(|slot: ChainSlot, p| {
+                    dr::green_mira_kernel(layout, base, p, slot.target as u32)
+                }),
+                progress,
+                cancel,
+            ),
+        DrVariant::TierneyMiraPairwise => MltDriver::new(targets, mlt_settings)
+            .estimator(estimator)
+            .run(
+                mlt::PerChain(|slot: ChainSlot, p| {
+                    dr::pairwise_tierney_mira_kernel(layout, base, p, slot.target as u32)
+                }),
+                progress,
+                cancel,
+            ),
+        DrVariant::GreenMiraPairwise => MltDriver::new(targets, mlt_settings)
+            .estimator(estimator)
+            .run(
+                mlt::PerChain(|slot: ChainSlot, p| {
+                    dr::pairwise_green_mira_kernel(layout, base, p, slot.target as u32)
+                }),
+                progress,
+                cancel,
+            ),
         DrVariant::CheapThenExpensive => {
             unreachable!("cheap-then-expensive runs through the Langevin driver")
         }

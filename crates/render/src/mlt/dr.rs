@@ -24,7 +24,10 @@
 
 use mcmc_core::delayed_rejection::IndependentSecondStage;
 use mcmc_core::DelayedRejection;
-use pss::dr::{ByState, SecondStageStreams, StageChoice};
+use pss::dr::{
+    ByState, GaussianTimidStage, KelemenFirstStage, PerCoordinateParams, SecondStageStreams,
+    StageChoice,
+};
 use pss::{
     LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseMltProposal, PssState,
 };
@@ -32,16 +35,26 @@ use pss::{
 use super::PATH_STREAMS;
 use crate::sampler::Stream;
 
-/// The acceptance rule of the second stage.
+/// The acceptance rule of the second stage, with its stages.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DrVariant {
-    /// Tierney & Mira 1999 (paper eq. 6-7).
+    /// Tierney & Mira 1999 (paper eq. 6-7) as the authors run it (Fig. 7): a 1-D Kelemen
+    /// first stage on every coordinate of the layout, a Gaussian second stage of sigma 0.1/64
+    /// ([`pss::dr::tierney_mira_kernel`]).
     TierneyMira,
-    /// Green & Mira 2001 with the fictional state (eq. 12-14).
+    /// Green & Mira 2001 with the fictional state (eq. 12-14), the authors' stages as
+    /// [`DrVariant::TierneyMira`] ([`pss::dr::green_mira_kernel`]).
     GreenMira,
     /// The pairwise orbital rule (eq. 11) — the paper's recommended variant.
     #[default]
     Orbital,
+    /// Tierney & Mira over this crate's pairwise stages: the orbital variant's pairwise polar
+    /// Kelemen first stage, a timid pairwise Kelemen second stage
+    /// ([`pss::dr::pairwise_tierney_mira_kernel`]).
+    TierneyMiraPairwise,
+    /// Green & Mira over the pairwise stages of [`DrVariant::TierneyMiraPairwise`]
+    /// ([`pss::dr::pairwise_green_mira_kernel`]).
+    GreenMiraPairwise,
     /// Cheap then expensive (section 5.2, with MALA in place of H2MC): an isotropic Gaussian
     /// first stage and a MALA second stage under Green and Mira's rule, on MMLT
     /// ([`crate::mlt::mala::cheap_then_expensive_kernel`]).
@@ -49,12 +62,14 @@ pub enum DrVariant {
 }
 
 impl DrVariant {
-    /// The variants with their CLI names.
-    pub const ALL: [(&'static str, DrVariant); 4] = [
+    /// The variants with their CLI names (the paper's Fig. 7 compares the first three).
+    pub const ALL: [(&'static str, DrVariant); 6] = [
         ("tierney-mira", DrVariant::TierneyMira),
         ("green-mira", DrVariant::GreenMira),
         ("orbital", DrVariant::Orbital),
         ("cheap-then-expensive", DrVariant::CheapThenExpensive),
+        ("tierney-mira-pairwise", DrVariant::TierneyMiraPairwise),
+        ("green-mira-pairwise", DrVariant::GreenMiraPairwise),
     ];
 
     /// The CLI name.
@@ -185,10 +200,45 @@ pub fn orbital_kernel(
     pss::dr::orbital_kernel(layout, p_large, strategy_streams(base, depth))
 }
 
-/// The Tierney-Mira kernel (`depth` as [`orbital_kernel`]): [`pss::dr::tierney_mira_kernel`]
-/// with [`strategy_streams`].
+/// The authors' Tierney-Mira kernel (`depth` as [`orbital_kernel`]):
+/// [`pss::dr::tierney_mira_kernel`] with the authors' stages
+/// ([`PerCoordinateParams::rioux_lavoie2020`]) and [`strategy_streams`].
 #[must_use]
 pub fn tierney_mira_kernel(
+    layout: PairLayout,
+    base: DrBase,
+    p_large: f64,
+    depth: u32,
+) -> DelayedRejection<KelemenFirstStage, ByStrategy<GaussianTimidStage>> {
+    pss::dr::tierney_mira_kernel(
+        layout,
+        p_large,
+        strategy_streams(base, depth),
+        PerCoordinateParams::rioux_lavoie2020(),
+    )
+}
+
+/// The authors' Green-Mira kernel (`depth` as [`orbital_kernel`]):
+/// [`pss::dr::green_mira_kernel`] with the authors' stages and [`strategy_streams`].
+#[must_use]
+pub fn green_mira_kernel(
+    layout: PairLayout,
+    base: DrBase,
+    p_large: f64,
+    depth: u32,
+) -> DelayedRejection<KelemenFirstStage, ByStrategy<GaussianTimidStage>, LayoutGhost> {
+    pss::dr::green_mira_kernel(
+        layout,
+        p_large,
+        strategy_streams(base, depth),
+        PerCoordinateParams::rioux_lavoie2020(),
+    )
+}
+
+/// The pairwise Tierney-Mira kernel (`depth` as [`orbital_kernel`]):
+/// [`pss::dr::pairwise_tierney_mira_kernel`] with [`strategy_streams`].
+#[must_use]
+pub fn pairwise_tierney_mira_kernel(
     layout: PairLayout,
     base: DrBase,
     p_large: f64,
@@ -197,13 +247,13 @@ pub fn tierney_mira_kernel(
     PairwiseMltProposal,
     ByStrategy<IndependentSecondStage<OnLayout<PairwiseKelemen>>>,
 > {
-    pss::dr::tierney_mira_kernel(layout, p_large, strategy_streams(base, depth))
+    pss::dr::pairwise_tierney_mira_kernel(layout, p_large, strategy_streams(base, depth))
 }
 
-/// The Green-Mira kernel (`depth` as [`orbital_kernel`]): [`pss::dr::green_mira_kernel`] with
-/// [`strategy_streams`].
+/// The pairwise Green-Mira kernel (`depth` as [`orbital_kernel`]):
+/// [`pss::dr::pairwise_green_mira_kernel`] with [`strategy_streams`].
 #[must_use]
-pub fn green_mira_kernel(
+pub fn pairwise_green_mira_kernel(
     layout: PairLayout,
     base: DrBase,
     p_large: f64,
@@ -213,5 +263,5 @@ pub fn green_mira_kernel(
     ByStrategy<IndependentSecondStage<OnLayout<PairwiseKelemen>>>,
     LayoutGhost,
 > {
-    pss::dr::green_mira_kernel(layout, p_large, strategy_streams(base, depth))
+    pss::dr::pairwise_green_mira_kernel(layout, p_large, strategy_streams(base, depth))
 }

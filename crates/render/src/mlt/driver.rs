@@ -212,7 +212,8 @@ where
     /// Runs with the same kind of kernel for every chain (from `make_kernel`, with the
     /// large-step probability; [`super::PerChain`] for one that depends on the chain's slot)
     /// and no adaptation besides automatic large-step control. With
-    /// [`MltEstimator::large_step_mis`] every single-stage kernel is wrapped in
+    /// [`MltEstimator::large_step_mis`] every kernel (single-stage, or two-stage delayed
+    /// rejection, whose splats keep the same contract) is wrapped in
     /// `mcmc_core::render_loop::LargeStepMis` (large-step density 1: primary sample space),
     /// weighting with its target's `b_d` and the large-step probability of each step.
     pub fn run<K>(
@@ -225,13 +226,7 @@ where
         K: Kernel<T> + LargeStepTunable + Send,
     {
         // Primary sample space: the large step is uniform, density 1.
-        let wrap = |slot: ChainSlot, kernel: K| {
-            if Kernel::<T>::stages(&kernel) == 1 {
-                LargeStepMis::for_slot(kernel, slot, 1.0)
-            } else {
-                LargeStepMis::disabled(kernel)
-            }
-        };
+        let wrap = |slot: ChainSlot, kernel: K| LargeStepMis::for_slot(kernel, slot, 1.0);
         let fresh = self.fresh();
         let strata = self.strata();
         let states: &dyn IndependentStates<PssState> = match &strata {

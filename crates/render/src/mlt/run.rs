@@ -154,8 +154,8 @@ pub struct MltEstimator {
     /// estimate of the chain's target (MMLT: of its depth), `p` the large-step probability
     /// of that step. Default off here; the session turns it on for PSSMLT
     /// ([`crate::methods::PssmltSettings`]; docs/methods/large-step-mis.md has the
-    /// measurement). Two-stage (delayed-rejection) kernels
-    /// ignore it.
+    /// measurement); for delayed rejection [`crate::methods::DrmltSettings`] turns it on
+    /// when asked (its splats keep the same contract, so the weights are the same).
     pub large_step_mis: bool,
     /// How chains are spread over the targets (MMLT: depths): pbrt's joint resampling
     /// (default) or a fixed count per depth with splats scaled by `b_d / n_d`
