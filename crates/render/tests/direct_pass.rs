@@ -80,6 +80,7 @@ fn replicate(seed: u64, chain_min_depth: u32, pass: Option<(SamplerKind, u32)>) 
         streams: PATH_STREAMS,
         stage_map: false,
         shard: render::shard::Shard::WHOLE,
+        normalization: Default::default(),
     };
     let kernel = |p: f64| {
         let small = SmallStep::new(SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap());

@@ -6,8 +6,8 @@ use super::direct_pass::{self, DirectRun};
 use std::sync::atomic::Ordering;
 
 use super::{
-    bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, unsampled_note, ChainSettings,
-    IntegratorKind, Method, PssKernel, RenderOutput, RenderSettings, Run, Unsampled,
+    bdpt_params, depth_note, emitter_notes, mcmc_output, relative_error, remaining, unsampled_note,
+    ChainSettings, IntegratorKind, Method, PssKernel, RenderOutput, RenderSettings, Run, Unsampled,
 };
 use crate::bdpt::{BdptParams, Roulette};
 use crate::error::RenderError;
@@ -15,7 +15,7 @@ use crate::mlt::direct::{self, DirectPass};
 use crate::mlt::{MltDriver, MltEstimator, PssmltTarget, PATH_STREAMS};
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
-use mcmc_core::render_loop::ChainAllocation;
+use mcmc_core::render_loop::{ChainAllocation, NormalizationMode};
 use pss::RasterParams;
 
 /// `pssmlt`'s settings. [`Default`] is the command line's default: the measured improvements
@@ -186,6 +186,23 @@ impl Method for PssmltSettings {
         if let Some(spent) = spent {
             mlt_settings.budget = remaining(mlt_settings.budget, spent);
         }
+        // A given `b` is the whole image's mean luminance: the chains render what the direct
+        // pass does not.
+        if let (NormalizationMode::Given(b), Some(d)) = (mlt_settings.normalization, &direct) {
+            let pass = d.pass.image.mean_luminance();
+            if !(b - pass > 0.0) {
+                return Err(RenderError::setting(
+                    "normalization",
+                    b,
+                    "above the direct-lighting pass's mean luminance (the chains render the rest of the light)",
+                ));
+            }
+            notes.push(format!(
+                "normalisation given: b = {b:.6} for the image, {:.6} for the chains after the direct pass's {pass:.6}",
+                b - pass
+            ));
+            mlt_settings.normalization = NormalizationMode::Given(b - pass);
+        }
         let estimator = MltEstimator {
             large_step_mis: self.large_step_mis,
             chain_allocation: ChainAllocation::Joint,
@@ -231,6 +248,12 @@ impl Method for PssmltSettings {
             output.cancelled |= d.pass.cancelled;
             if let Some(stats) = output.mcmc.as_mut() {
                 stats.direct_pass = Some(d.stats);
+                // The pass's light is not scaled by `b`: the brightness error is relative to
+                // the whole image.
+                stats.brightness_standard_error = relative_error(
+                    stats.b_standard_error,
+                    stats.b + d.pass.image.mean_luminance(),
+                );
                 stats.times.direct_pass = d.elapsed;
             }
         }
