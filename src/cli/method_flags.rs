@@ -86,7 +86,8 @@ pub(crate) struct MethodFlags {
     /// budget), `bootstrap` (pbrt's: the bootstrap's alone), a number `b > 0`, or an image
     /// file (e.g. a reference .exr) whose mean luminance the image gets: comparisons on one
     /// footing [default: pooled].
-    #[arg(long, value_name = "pooled|bootstrap|B|FILE", value_parser = parse::normalization)]
+    #[arg(long, allow_negative_numbers = true, value_name = "pooled|bootstrap|B|FILE",
+          value_parser = parse::normalization)]
     pub(crate) normalization: Option<mcmc_core::render_loop::NormalizationMode>,
     /// pt (and qmc), bdpt, pssmlt (and drmlt over it): Russian roulette, `off`, or `N` (from N
     /// bounces on, 0..=1024; pt: continue with probability min(1, max beta) after every bounce

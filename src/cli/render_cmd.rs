@@ -396,14 +396,14 @@ fn per_pixel(output: &RenderOutput, settings: &RenderSettings) -> f64 {
 
 /// The normalisation of a Markov chain render and the error of the brightness it causes,
 /// with a note when that error exceeds [`render::methods::BRIGHTNESS_TARGET`].
-fn print_brightness(m: &render::methods::McmcStats) {
+fn print_brightness(m: &render::methods::McmcStats, mean: f64) {
     if m.normalization_given {
-        println!("brightness  b = {:.6} given", m.b);
+        println!("brightness  mean luminance {mean:.6}, b = {:.6} given", m.b);
         return;
     }
     let error = m.brightness_standard_error;
     println!(
-        "brightness  standard error {:.2} % of the mean (b = {:.6} +- {:.2e} from {} bootstrap samples and {} large steps)",
+        "brightness  mean luminance {mean:.6}, standard error {:.2} % (b = {:.6} +- {:.2e} from {} bootstrap samples and {} large steps)",
         100.0 * error,
         m.b,
         m.b_standard_error,
@@ -457,7 +457,7 @@ fn print_summary(
         );
     }
     if let Some(m) = output.mcmc.as_ref().filter(|m| !m.found_nothing) {
-        print_brightness(m);
+        print_brightness(m, output.image.mean_luminance());
     }
     println!("rate        {rate:.0} samples/s");
     println!("non-finite  {} samples dropped", output.dropped_nonfinite);
