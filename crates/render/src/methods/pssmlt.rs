@@ -190,7 +190,7 @@ impl Method for PssmltSettings {
         // pass does not.
         if let (NormalizationMode::Given(b), Some(d)) = (mlt_settings.normalization, &direct) {
             let pass = d.pass.image.mean_luminance();
-            if !(b - pass > 0.0) {
+            if b - pass <= 0.0 || pass.is_nan() {
                 return Err(RenderError::setting(
                     "normalization",
                     b,
