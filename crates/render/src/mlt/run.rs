@@ -88,7 +88,7 @@ pub struct MltOutput {
     pub bootstrap_standard_error: f64,
     /// Large-step candidates pooled into `b`.
     pub large_step_samples: u64,
-    /// True if `b` was given ([`super::MltDriver::normalization_mode`] or
+    /// True if `b` was given ([`MltSettings::normalization`] or
     /// [`super::MltDriver::normalized`]) rather than estimated.
     pub normalization_given: bool,
     /// Bootstrap samples evaluated.
