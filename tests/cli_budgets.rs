@@ -243,16 +243,16 @@ fn ctrl_c_on_a_large_render_is_prompt_and_says_what_is_missing() {
     assert!(stdout(&output).contains("unsampled"), "{}", stdout(&output));
 }
 
-/// The reported bootstrap estimate: `b` and its standard error from the MCMC note.
+/// The reported normalisation: `b` and its standard error from the MCMC note.
 fn reported_b(err: &str) -> (f64, f64) {
     let line = err
         .lines()
-        .find(|l| l.contains("bootstrap: b = "))
-        .unwrap_or_else(|| panic!("no bootstrap note:\n{err}"));
+        .find(|l| l.contains("normalisation: b = "))
+        .unwrap_or_else(|| panic!("no normalisation note:\n{err}"));
     let after = &line[line.find("b = ").unwrap() + 4..];
     let b: f64 = after.split_whitespace().next().unwrap().parse().unwrap();
     let se_text = &after[after.find("standard error ").unwrap() + 15..];
-    let se: f64 = se_text.split(')').next().unwrap().parse().unwrap();
+    let se: f64 = se_text.split(',').next().unwrap().parse().unwrap();
     (b, se)
 }
 

@@ -127,7 +127,7 @@ fn every_integrator_renders_and_mcmc_logs_its_statistics() {
         );
         if is_mcmc {
             let err = stderr(&output);
-            assert!(err.contains("bootstrap: b ="), "{err}");
+            assert!(err.contains("normalisation: b ="), "{err}");
             if integrator == "pathmlt" {
                 assert!(err.contains("no large steps"), "{err}");
             } else {

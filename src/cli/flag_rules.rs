@@ -139,6 +139,11 @@ pub(crate) const RULES: &[FlagRule] = &[
         also: "",
     },
     FlagRule {
+        id: "normalization",
+        applies: |m| pss_chains(m) || m.kind() == K::PathMlt,
+        also: "",
+    },
+    FlagRule {
         id: "roulette",
         applies: |m| match m {
             M::Pt(_) | M::Qmc(_) | M::Bdpt(_) | M::Pssmlt(_) => true,
@@ -252,6 +257,7 @@ mod tests {
         ("small_step", Some(["kelemen", "gaussian=0.01"])),
         ("chains", Some(["8", "16"])),
         ("bootstrap_samples", Some(["100", "200"])),
+        ("normalization", Some(["bootstrap", "2.5"])),
         ("roulette", Some(["2", "off"])),
         ("sampler", Some(["independent", "sobol"])),
         ("strategy_images", None),
@@ -290,7 +296,7 @@ mod tests {
             "direct_depth" => with(MALA, &["pssmlt", "pssmlt-pt"]),
             // drmlt's default rule (orbital) has its own second-stage kernel.
             "small_step" => with(MALA, &["pssmlt", "pssmlt-pt", "mmlt"]),
-            "chains" | "bootstrap_samples" => with(MCMC_PSS, &["pathmlt"]),
+            "chains" | "bootstrap_samples" | "normalization" => with(MCMC_PSS, &["pathmlt"]),
             "roulette" => vec![
                 "pt",
                 "bdpt",

@@ -82,6 +82,14 @@ pub(crate) struct MethodFlags {
     #[arg(long, value_name = "N", default_value_t = 100_000,
           value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
     pub(crate) bootstrap_samples: u32,
+    /// MCMC integrators: the image's normalisation `b`: `pooled` (the bootstrap's samples with
+    /// every large-step candidate of the chains, so the brightness error falls with the
+    /// budget), `bootstrap` (pbrt's: the bootstrap's alone), a number `b > 0`, or an image
+    /// file (e.g. a reference .exr) whose mean luminance the image gets: comparisons on one
+    /// footing [default: pooled].
+    #[arg(long, allow_negative_numbers = true, value_name = "pooled|bootstrap|B|FILE",
+          value_parser = parse::normalization)]
+    pub(crate) normalization: Option<mcmc_core::render_loop::NormalizationMode>,
     /// pt (and qmc), bdpt, pssmlt (and drmlt over it): Russian roulette, `off`, or `N` (from N
     /// bounces on, 0..=1024; pt: continue with probability min(1, max beta) after every bounce
     /// beyond the N-th; bdpt: min(0.95, f cos / pdf of the last bounce)) [default: 5 for pt,
@@ -148,6 +156,7 @@ impl MethodFlags {
                 fixed => fixed,
             },
             small_step: self.small_step,
+            normalization: self.normalization.unwrap_or_default(),
         }
     }
 
@@ -244,6 +253,7 @@ impl MethodFlags {
                 s.bootstrap_samples = self.bootstrap_samples as usize;
                 s.perturbation = self.perturbation;
                 s.adapt = self.adapt;
+                s.normalization = self.normalization.unwrap_or(s.normalization);
             }
             MethodSettings::Lqmc(_) => {}
             _ => {}

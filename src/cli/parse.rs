@@ -52,6 +52,45 @@ pub(crate) fn direct_share(text: &str) -> Result<render::mlt::direct::DirectPass
     }
 }
 
+/// `--normalization`: `pooled`, `bootstrap`, a number `b > 0`, or an image file whose mean
+/// Rec. 709 luminance is `b` (a reference rendering: every method then has its brightness).
+pub(crate) fn normalization(
+    text: &str,
+) -> Result<mcmc_core::render_loop::NormalizationMode, String> {
+    use mcmc_core::render_loop::NormalizationMode;
+    if text.eq_ignore_ascii_case("pooled") {
+        return Ok(NormalizationMode::Pooled);
+    }
+    if text.eq_ignore_ascii_case("bootstrap") {
+        return Ok(NormalizationMode::Bootstrap);
+    }
+    if let Ok(b) = text.trim().parse::<f64>() {
+        return if b.is_finite() && b > 0.0 {
+            Ok(NormalizationMode::Given(b))
+        } else {
+            Err(format!(
+                "a given normalisation must be a finite number > 0, got '{text}'"
+            ))
+        };
+    }
+    let path = std::path::Path::new(text);
+    if !path.is_file() {
+        return Err(format!(
+            "expected `pooled`, `bootstrap`, a number > 0 or an image file (.exr, .hdr, .pfm), got '{text}' (no such file)"
+        ));
+    }
+    let image = render::image_io::read_image(path)
+        .map_err(|e| format!("cannot read the reference image '{text}': {e}"))?;
+    let b = image.mean_luminance();
+    if b.is_finite() && b > 0.0 {
+        Ok(NormalizationMode::Given(b))
+    } else {
+        Err(format!(
+            "the reference image '{text}' has mean luminance {b}: a normalisation needs a finite mean > 0"
+        ))
+    }
+}
+
 /// `--small-step`: `kelemen`, `kelemen=S1,S2` or `gaussian=SIGMA`.
 pub(crate) fn small_step(text: &str) -> Result<pss::SmallMutation, String> {
     if text.eq_ignore_ascii_case("kelemen") {

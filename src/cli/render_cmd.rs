@@ -394,6 +394,32 @@ fn per_pixel(output: &RenderOutput, settings: &RenderSettings) -> f64 {
     output.samples as f64 / (f64::from(settings.width) * f64::from(settings.height))
 }
 
+/// The normalisation of a Markov chain render and the error of the brightness it causes,
+/// with a note when that error exceeds [`render::methods::BRIGHTNESS_TARGET`].
+fn print_brightness(m: &render::methods::McmcStats, mean: f64) {
+    if m.normalization_given {
+        println!("brightness  mean luminance {mean:.6}, b = {:.6} given", m.b);
+        return;
+    }
+    let error = m.brightness_standard_error;
+    println!(
+        "brightness  mean luminance {mean:.6}, standard error {:.2} % (b = {:.6} +- {:.2e} from {} bootstrap samples and {} large steps)",
+        100.0 * error,
+        m.b,
+        m.b_standard_error,
+        m.bootstrap_samples,
+        m.large_step_samples
+    );
+    let target = render::methods::BRIGHTNESS_TARGET;
+    if error > target {
+        println!(
+            "note        the brightness standard error {:.2} % exceeds {:.0} %: more --bootstrap-samples, a larger budget (large steps refine b), or --normalization with a reference",
+            100.0 * error,
+            100.0 * target
+        );
+    }
+}
+
 fn print_summary(
     args: &RenderArgs,
     settings: &RenderSettings,
@@ -429,6 +455,9 @@ fn print_summary(
             100.0 * output.unsampled_pixels as f64
                 / (f64::from(settings.width) * f64::from(settings.height))
         );
+    }
+    if let Some(m) = output.mcmc.as_ref().filter(|m| !m.found_nothing) {
+        print_brightness(m, output.image.mean_luminance());
     }
     println!("rate        {rate:.0} samples/s");
     println!("non-finite  {} samples dropped", output.dropped_nonfinite);

@@ -119,6 +119,17 @@ pub trait Kernel<T: Target> {
         let _ = target;
         path.iter().rev().cloned().collect()
     }
+
+    /// `Some(q)` if the first-stage candidate of mixture component `component` was drawn
+    /// independently of the current state with constant density `q` from the distribution
+    /// of the render loop's independent states ([`crate::Proposal::independent_density`]):
+    /// its density `f` (reported in [`StepInfo::candidate_log_density`]) then gives one more
+    /// independent sample `f / q` of the target's integral. `None` (the default) for kernels
+    /// without such a move; the render loop then keeps the bootstrap's normalisation.
+    fn independent_density(&self, component: usize) -> Option<f64> {
+        let _ = component;
+        None
+    }
 }
 
 /// `min(1, exp(log_ratio))` with NaN mapped to 0.

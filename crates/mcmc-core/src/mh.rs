@@ -122,6 +122,10 @@ impl<T: Target, P: Proposal<T::State>> Kernel<T> for Mh<P> {
             .collect();
         log_sum_exp(&terms)
     }
+
+    fn independent_density(&self, component: usize) -> Option<f64> {
+        self.proposal.independent_density(component)
+    }
 }
 
 impl<P: ScaleTunable> ScaleTunable for Mh<P> {

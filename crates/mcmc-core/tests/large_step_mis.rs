@@ -23,8 +23,8 @@ use std::sync::atomic::AtomicBool;
 
 use mcmc_core::delayed_rejection::IndependentSecondStage;
 use mcmc_core::render_loop::{
-    IndependentStates, LargeStepMis, LoopBudget, LoopSettings, RenderLoop, Splat, SplatGrid,
-    SplatObserver,
+    IndependentStates, LargeStepMis, LoopBudget, LoopSettings, NormalizationMode, RenderLoop,
+    Splat, SplatGrid, SplatObserver,
 };
 use mcmc_core::testing::{
     toy_splat_weight_test, LargeStepWalk, MisWithStaleProbability, MisWithoutLargeStepTerm,
@@ -265,6 +265,8 @@ fn run_loop(
         round_mutations: 500,
         seed,
         large_step_mis: mis_on,
+        // The bootstrap's `b` alone, so that the per-target `b_d` sum to it exactly.
+        normalization: NormalizationMode::Bootstrap,
         ..LoopSettings::default()
     };
     let out = rayon::ThreadPoolBuilder::new()

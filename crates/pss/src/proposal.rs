@@ -101,6 +101,10 @@ impl Proposal<PssState> for LargeStep {
     fn is_symmetric(&self) -> bool {
         true
     }
+    /// Uniform on primary sample space, density 1.
+    fn independent_density(&self, _component: usize) -> Option<f64> {
+        Some(1.0)
+    }
 }
 
 /// Kelemen-style PSSMLT proposal: a large step with probability `p_large`, else a small step
@@ -251,6 +255,10 @@ impl Proposal<PssState> for PssmltProposal {
                 None => f64::NEG_INFINITY,
             },
         }
+    }
+    /// The large step (component 1) is uniform on primary sample space, density 1.
+    fn independent_density(&self, component: usize) -> Option<f64> {
+        (component == 1).then_some(1.0)
     }
 }
 

@@ -87,6 +87,7 @@ fn replicate(seed: u64, chain_min_depth: u32, pass: Option<(SamplerKind, u32)>) 
         streams: PATH_STREAMS,
         stage_map: false,
         shard: render::shard::Shard::WHOLE,
+        normalization: Default::default(),
     };
     let kernel = |p: f64| {
         let small = SmallStep::new(SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap());
@@ -230,7 +231,7 @@ fn the_default_balanced_pass_converges_to_bdpt() {
 
 /// `R` replicates of `method` as the session renders it, at 64 mutations per pixel; every
 /// replicate's notes must report the direct pass.
-fn session_replicates(method: &MethodSettings, seed0: u64) -> Vec<Image> {
+fn session_replicates(method: MethodSettings, seed0: u64) -> Vec<Image> {
     let cancel = AtomicBool::new(false);
     (0..R as u64)
         .map(|r| {
@@ -241,7 +242,7 @@ fn session_replicates(method: &MethodSettings, seed0: u64) -> Vec<Image> {
                 threads: 2,
                 seed: seed0 + r,
                 max_depth: DEPTH,
-                method: method.clone().with_chains(64, 20_000),
+                method: method.with_chains(64, 20_000),
             };
             let out = render(cornell(), &settings, &NoProgress, &cancel).unwrap();
             assert!(
@@ -273,7 +274,7 @@ fn the_pass_before_mmlt_mala_and_pssmlt_pt_converges_to_bdpt() {
         ("pssmlt-pt", IntegratorKind::PssmltPt.settings(), 48_000),
     ];
     for (name, method, seed0) in cases {
-        let images = session_replicates(&method, seed0);
+        let images = session_replicates(method, seed0);
         against_reference(
             &format!("cornell {name} with the direct pass"),
             &images,
@@ -304,6 +305,7 @@ fn mmlt_chains_without_the_pass_miss_the_direct_light() {
                 streams: PATH_STREAMS,
                 stage_map: false,
                 shard: render::shard::Shard::WHOLE,
+                normalization: Default::default(),
             };
             let kernel = |p: f64| {
                 let small =

@@ -57,6 +57,7 @@ fn mlt_settings() -> MltSettings {
         streams: PATH_STREAMS,
         stage_map: false,
         shard: render::shard::Shard::WHOLE,
+        normalization: Default::default(),
     }
 }
 

@@ -73,6 +73,7 @@ fn settings(scene: &Scene, seed: u64, mpp: f64, large_step: LargeStepMode) -> Ml
         streams: PATH_STREAMS,
         stage_map: false,
         shard: render::shard::Shard::WHOLE,
+        normalization: Default::default(),
     }
 }
 

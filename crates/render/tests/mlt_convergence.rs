@@ -144,6 +144,7 @@ fn settings(scene: &Scene, seed: u64, mutations_per_pixel: f64) -> MltSettings {
         streams: PATH_STREAMS,
         stage_map: false,
         shard: render::shard::Shard::WHOLE,
+        normalization: Default::default(),
     }
 }
 

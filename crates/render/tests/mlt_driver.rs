@@ -78,6 +78,7 @@ fn settings(seed: u64, large_step: LargeStepMode) -> MltSettings {
         streams: 1,
         stage_map: false,
         shard: render::shard::Shard::WHOLE,
+        normalization: Default::default(),
     }
 }
 

@@ -102,6 +102,7 @@ fn mmlt_normalized(
         streams: PATH_STREAMS,
         stage_map: false,
         shard: render::shard::Shard::WHOLE,
+        normalization: Default::default(),
     };
     let targets = MmltTarget::all_depths(scene, params(), w, h);
     let cancel = AtomicBool::new(false);
@@ -276,6 +277,7 @@ fn strategy_strata_match_the_analytic_enclosure() {
                 streams: PATH_STREAMS,
                 stage_map: false,
                 shard: render::shard::Shard::WHOLE,
+                normalization: Default::default(),
             };
             let out = MltDriver::new(
                 &MmltTarget::all_depths(&scene, enclosure_params, 16, 16),

@@ -100,6 +100,7 @@ fn replicates(
                 streams: 1,
                 stage_map: false,
                 shard: render::shard::Shard::WHOLE,
+                normalization: Default::default(),
             };
             let out = pathmlt::render_adaptive(
                 scene,

@@ -120,6 +120,18 @@ pub trait Proposal<S> {
             self.log_q_component(j, y, x) - self.log_q_component(j, x, y)
         }
     }
+
+    /// `Some(q)` if component `component` draws its candidate independently of the current
+    /// state with the constant density `q` on the support of the target, from the distribution
+    /// the render loop's independent states are drawn from (a large step of primary sample
+    /// space: uniform, `q = 1`); `None` (the default) for any other move. A candidate `y` of
+    /// such a component is an independent sample of the target's integral, `f(y) / q`
+    /// (Kelemen et al. 2002, section 4), which the render loop pools into its normalisation
+    /// ([`crate::render_loop::Normalization`]).
+    fn independent_density(&self, component: usize) -> Option<f64> {
+        let _ = component;
+        None
+    }
 }
 
 /// log-sum-exp of a slice, robust to `NEG_INFINITY` entries.

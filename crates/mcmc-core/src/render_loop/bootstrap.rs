@@ -151,6 +151,10 @@ pub(crate) struct BootstrapOutcome {
     /// Standard error of `b` (from the per-row sums, rows being independent; approximate
     /// with strata, whose groups span several rows).
     pub standard_error: f64,
+    /// Samples behind each `target_b` (whole groups only).
+    pub target_samples: Vec<u64>,
+    /// Variance of each `target_b` (from its samples; approximate with strata).
+    pub target_variance: Vec<f64>,
     /// Samples evaluated (over all targets).
     pub evaluated: u64,
     /// Chain starts: (target index, sample index), one per requested chain; empty if no
@@ -288,6 +292,7 @@ where
     };
     let (mut sum, mut sum_sq_rows, mut evaluated) = (0.0f64, 0.0f64, 0u64);
     let mut target_sums = vec![0.0f64; d as usize];
+    let mut target_sum_sq = vec![0.0f64; d as usize];
     let mut target_hits = vec![0u64; d as usize];
     let (mut stopped_early, mut cancelled) = (false, false);
     let init = || (source.empty(), T::Payload::default());
@@ -326,6 +331,7 @@ where
                 sums[if per_target { t } else { 0 }].push(w);
                 r += w;
                 *s += w;
+                target_sum_sq[t] += w * w;
                 target_hits[t] += u64::from(w > 0.0);
             }
             sum += r;
@@ -360,6 +366,7 @@ where
                     &mut payload,
                 );
                 target_sums[t] -= w;
+                target_sum_sq[t] -= w * w;
                 target_hits[t] -= u64::from(w > 0.0);
                 sum -= w;
                 let (g, pos) = if per_target { (t, i) } else { (0, sample) };
@@ -417,10 +424,30 @@ where
     } else {
         f64::INFINITY
     };
+    let target_samples: Vec<u64> = if stratified {
+        limits.iter().map(|&l| l.min(rows_count)).collect()
+    } else {
+        vec![rows_count; d as usize]
+    };
+    let target_variance = target_b
+        .iter()
+        .zip(&target_sum_sq)
+        .zip(&target_samples)
+        .map(|((&mean, &sq), &n)| {
+            if n > 1 {
+                let n = n as f64;
+                (sq / n - mean * mean).max(0.0) / (n - 1.0)
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
     let mut outcome = BootstrapOutcome {
         b,
         target_b,
         standard_error,
+        target_samples,
+        target_variance,
         evaluated,
         starts: Vec::new(),
         target_chains: vec![0; d as usize],

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::normalization::LargeStepSums;
 use super::splat::{SplatObserver, SplatPayload, SplatSink};
 use crate::chain::Chain;
 use crate::controller::Controller;
@@ -26,6 +27,11 @@ pub(crate) struct Job<'t, T: Target, K, C, Sk> {
     pub(crate) chains: Vec<JobChain<'t, T, K, C>>,
     /// Per chain: the extra factor of its splats ([`super::ChainAllocation`]).
     pub(crate) weights: Vec<f64>,
+    /// Per chain: the index of its target.
+    pub(crate) targets: Vec<usize>,
+    /// Per target: the job's large-step candidates ([`super::Normalization`]), counted by
+    /// an owned job only.
+    pub(crate) large_steps: Vec<LargeStepSums>,
     pub(crate) sink: Sk,
     pub(crate) dropped: u64,
     pub(crate) non_finite: u64,
@@ -35,10 +41,12 @@ pub(crate) struct Job<'t, T: Target, K, C, Sk> {
 }
 
 impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
-    pub(crate) fn new(sink: Sk) -> Self {
+    pub(crate) fn new(sink: Sk, targets: usize) -> Self {
         Self {
             chains: Vec::new(),
             weights: Vec::new(),
+            targets: Vec::new(),
+            large_steps: vec![LargeStepSums::default(); targets],
             sink,
             dropped: 0,
             non_finite: 0,
@@ -82,12 +90,23 @@ struct Stops<'a> {
     first_round: bool,
 }
 
+/// Where a round counts its chains' large-step candidates: per chain its target, per target
+/// the job's sums (`None`: not counted, a muted job).
+struct Tally<'a> {
+    targets: &'a [usize],
+    sums: &'a mut [LargeStepSums],
+}
+
 /// One round of a job's chains (`round` mutations each, fewer if a chain's budget is
 /// nearly used), polling `stops` every [`POLL_EVERY`] mutations; returns the steps whose
-/// candidate had a non-finite density.
+/// candidate had a non-finite density. With a `tally`, every step whose candidate came from
+/// an independent component ([`Kernel::independent_density`]) adds `f / q` to its target's
+/// sums (in the job's fixed order of steps).
+#[allow(clippy::too_many_arguments)]
 fn step_round<T, K, C, O>(
     chains: &mut [JobChain<'_, T, K, C>],
     weights: &[f64],
+    mut tally: Option<Tally<'_>>,
     round: u64,
     stops: &Stops<'_>,
     observer: &mut O,
@@ -112,8 +131,17 @@ where
             guaranteed = false;
             let n = left.min(POLL_EVERY);
             for _ in 0..n {
-                if chain.step(observer).is_err() {
-                    non_finite += 1;
+                match chain.step(observer) {
+                    Ok(info) => {
+                        if let Some(t) = tally.as_mut() {
+                            if let Some(q) = chain.kernel().independent_density(info.component) {
+                                // An invalid candidate lies outside the support: f = 0.
+                                let f = info.candidate_log_density[0].exp();
+                                t.sums[t.targets[i]].push(f / q);
+                            }
+                        }
+                    }
+                    Err(_) => non_finite += 1,
                 }
             }
             left -= n;
@@ -136,7 +164,8 @@ pub(crate) struct RoundsSummary<Sh> {
 
 /// Runs rounds of `round` mutations per chain until every chain's budget is used, the
 /// deadline passes or `cancel` is set; pools the controllers' shared statistics after every
-/// round, in job order.
+/// round, in job order. With `count_large_steps`, owned jobs count their chains' large-step
+/// candidates ([`Job::large_steps`]).
 ///
 /// A deadline that has already passed when the rounds start (the chains' set-up took the
 /// budget) still lets the first chain of every job run its first [`POLL_EVERY`] mutations,
@@ -144,6 +173,7 @@ pub(crate) struct RoundsSummary<Sh> {
 /// stops even those.
 pub(crate) fn run_rounds<T, K, C, Sk>(
     jobs: &mut [Job<'_, T, K, C, Sk>],
+    count_large_steps: bool,
     round: u64,
     deadline: Option<Instant>,
     progress: &dyn Progress,
@@ -173,6 +203,8 @@ where
             let Job {
                 chains,
                 weights,
+                targets,
+                large_steps,
                 sink,
                 dropped,
                 non_finite,
@@ -184,11 +216,23 @@ where
                 first_round: first,
             };
             if *muted {
-                step_round(chains, weights, round, &stops, &mut (), progress);
+                step_round(chains, weights, None, round, &stops, &mut (), progress);
                 return;
             }
+            let tally = count_large_steps.then_some(Tally {
+                targets,
+                sums: large_steps,
+            });
             let mut observer = SplatObserver::new(sink);
-            *non_finite += step_round(chains, weights, round, &stops, &mut observer, progress);
+            *non_finite += step_round(
+                chains,
+                weights,
+                tally,
+                round,
+                &stops,
+                &mut observer,
+                progress,
+            );
             *dropped += observer.dropped;
         });
         for job in jobs.iter_mut() {

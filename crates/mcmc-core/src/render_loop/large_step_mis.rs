@@ -277,6 +277,10 @@ impl<T: Target, K: Kernel<T> + LargeStepTunable> Kernel<T> for LargeStepMis<K> {
     fn reverse_path(&self, target: &T, path: &[SampleOf<T>]) -> Vec<SampleOf<T>> {
         self.kernel.reverse_path(target, path)
     }
+
+    fn independent_density(&self, component: usize) -> Option<f64> {
+        self.kernel.independent_density(component)
+    }
 }
 
 impl<K: LargeStepTunable> LargeStepTunable for LargeStepMis<K> {

@@ -23,6 +23,11 @@
 //!    cancellation and progress are checked inside rounds, so a cancel takes effect within a
 //!    fraction of a second and the partial image is a correct estimate of the mutations done.
 //!
+//! 5. **Normalisation** after the chains ([`Normalization`]): by default the bootstrap's
+//!    samples pooled with every large-step candidate of the chains, so the brightness error
+//!    falls with the chains' time; or the bootstrap alone, or a caller's `b`
+//!    ([`NormalizationMode`]).
+//!
 //! The pixel estimate is `I_j = (b / N) sum_i sum_splats w_i rgb / f(x_i)` per unit of the
 //! sink's measure (Kelemen et al. 2002, eq. 5, with expected values): multiply the sink by
 //! [`LoopOutput::splat_scale`] `= b / N` and by the inverse of the pixel's measure (for
@@ -32,6 +37,7 @@ mod bootstrap;
 mod exact_grid;
 mod jobs;
 mod large_step_mis;
+mod normalization;
 mod notes;
 mod resample;
 mod splat;
@@ -45,6 +51,7 @@ pub use exact_grid::{ExactSplatGrid, DEFAULT_FRACTION_BITS, EXACT_GRID_BYTES_PER
 #[cfg(feature = "testing")]
 pub(crate) use large_step_mis::mis_step;
 pub use large_step_mis::LargeStepMis;
+pub use normalization::{LargeStepSums, Normalization, NormalizationEstimate, NormalizationMode};
 use notes::{few_hits_note, missed_targets_note};
 pub use splat::{Splat, SplatGrid, SplatObserver, SplatPayload, SplatSink};
 
@@ -116,6 +123,9 @@ pub struct LoopSettings {
     /// at its rate. A controller whose first round is an estimation phase raises it so that
     /// the phase stays a bounded share of the run.
     pub min_time_mutations: u64,
+    /// How `b` is estimated (default [`NormalizationMode::Pooled`]: the bootstrap with every
+    /// large-step candidate; see [`Normalization`]). A given `b` must be finite and positive.
+    pub normalization: NormalizationMode,
 }
 
 /// A part of a render split over processes: shard `index` of `count` owns the contiguous
@@ -171,6 +181,7 @@ impl Default for LoopSettings {
             chain_allocation: ChainAllocation::Joint,
             shard: Shard::WHOLE,
             min_time_mutations: MIN_TIME_MUTATIONS,
+            normalization: NormalizationMode::Pooled,
         }
     }
 }
@@ -243,6 +254,15 @@ impl LoopSettings {
                 allowed: "index in 0..count, count >= 1",
             });
         }
+        if let NormalizationMode::Given(b) = self.normalization {
+            if !(b.is_finite() && b > 0.0) {
+                return Err(McmcError::InvalidParameter {
+                    name: "normalization",
+                    value: b,
+                    allowed: "a finite b > 0",
+                });
+            }
+        }
         if !(self.bootstrap_time_share > 0.0 && self.bootstrap_time_share <= 1.0) {
             return Err(McmcError::InvalidParameter {
                 name: "bootstrap_time_share",
@@ -288,11 +308,22 @@ pub struct LoopOutput<K, Sh> {
     /// `b / mutations`: the factor that turns the sink's accumulated `w rgb / f` into the
     /// estimate per unit of the sink's measure (0 when nothing ran).
     pub splat_scale: f64,
-    /// The bootstrap estimate of `b`, the integral of the target (summed over targets).
+    /// The normalisation `b` the image is scaled with, the integral of the target (summed
+    /// over targets): [`Normalization::estimate`] of [`LoopOutput::normalization`].
     pub b: f64,
-    /// Standard error of `b`.
+    /// Standard error of `b` (0 for a given `b`).
     pub b_standard_error: f64,
-    /// The bootstrap estimate `b_d` of each target's integral (they sum to `b`).
+    /// The bootstrap's estimate of `b` (or the sum of a per-target normalisation given to
+    /// [`RenderLoop::run_normalized`]).
+    pub bootstrap_b: f64,
+    /// The bootstrap's standard error of its estimate.
+    pub bootstrap_standard_error: f64,
+    /// Large-step candidates pooled into `b` ([`NormalizationMode::Pooled`]).
+    pub large_step_samples: u64,
+    /// What `b` rests on (a sharded render's part carries it: [`Normalization::add`]).
+    pub normalization: Normalization,
+    /// The bootstrap estimate `b_d` of each target's integral (they sum to `bootstrap_b`;
+    /// the chains' allocation and per-target splat weights use them).
     pub target_b: Vec<f64>,
     /// Chains started per target (their starts; chains whose start failed to re-evaluate
     /// are included).
@@ -565,11 +596,36 @@ where
             boot.target_b = nb.to_vec();
             boot.b = nb.iter().sum();
         }
+        let n_jobs = settings.jobs.min(boot.starts.len().max(1));
+        let mode = match (settings.normalization, normalization) {
+            (NormalizationMode::Given(b), _) => NormalizationMode::Given(b),
+            (_, Some(nb)) => NormalizationMode::Given(nb.iter().sum()),
+            (mode, None) => mode,
+        };
+        let mut norm = Normalization::new(
+            mode,
+            boot.target_b.clone(),
+            boot.target_variance.clone(),
+            boot.target_samples.clone(),
+            boot.standard_error,
+            n_jobs,
+        );
+        if let NormalizationMode::Given(b) = settings.normalization {
+            notes.push(format!(
+                "normalisation given: b = {b:.6} (the bootstrap's estimate was {:.6} +- {:.6})",
+                boot.b, boot.standard_error
+            ));
+        }
+        let first = norm.estimate();
         let mut out = LoopOutput {
             sink: (self.sink)(),
             splat_scale: 0.0,
-            b: boot.b,
-            b_standard_error: boot.standard_error,
+            b: first.b,
+            b_standard_error: first.standard_error,
+            bootstrap_b: boot.b,
+            bootstrap_standard_error: boot.standard_error,
+            large_step_samples: 0,
+            normalization: norm.clone(),
             target_b: boot.target_b.clone(),
             target_chains: boot.target_chains.clone(),
             target_hits: boot.target_hits.clone(),
@@ -642,17 +698,18 @@ where
             &boot.target_chains,
             settings.chain_allocation,
         ));
-        let n_jobs = settings.jobs.min(chains);
         let mut skipped = 0usize;
         let shard = settings.shard;
         let mut setup_stopped = None;
         let mut job_list: Vec<jobs::Job<'_, T, K, C, Sk>> = Vec::with_capacity(n_jobs);
+        // The index of each listed job in the fixed job list (a shard lists only its own).
+        let mut job_index: Vec<usize> = Vec::with_capacity(n_jobs);
         'jobs: for j in 0..n_jobs {
             if !(shard.owns(j, n_jobs) || C::COUPLES_CHAINS) {
                 continue;
             }
             let (lo, hi) = (j * chains / n_jobs, (j + 1) * chains / n_jobs);
-            let mut job = jobs::Job::new((self.sink)());
+            let mut job = jobs::Job::new((self.sink)(), self.targets.len());
             job.muted = !shard.owns(j, n_jobs);
             for c in lo..hi {
                 if c % SETUP_POLL == 0 && c > 0 {
@@ -663,6 +720,7 @@ where
                     }
                     if setup_stopped.is_some() {
                         job_list.push(job);
+                        job_index.push(j);
                         break 'jobs;
                     }
                 }
@@ -686,11 +744,13 @@ where
                     Ok(chain) => {
                         job.chains.push((chain, per_chain(c)));
                         job.weights.push(target_weight[target]);
+                        job.targets.push(target);
                     }
                     Err(_) => skipped += 1,
                 }
             }
             job_list.push(job);
+            job_index.push(j);
         }
         if let Some((started, why)) = setup_stopped {
             out.notes.push(format!(
@@ -705,6 +765,7 @@ where
         let chains_start = Instant::now();
         let summary = jobs::run_rounds(
             &mut job_list,
+            matches!(norm.mode, NormalizationMode::Pooled),
             settings.round_mutations,
             deadline,
             progress,
@@ -714,8 +775,9 @@ where
         out.shared = summary.shared;
         out.chains_time = chains_start.elapsed();
         out.first_round_time = summary.first_round;
-        for job in job_list.iter().filter(|j| !j.muted) {
+        for (j, job) in job_list.iter().enumerate().filter(|(_, j)| !j.muted) {
             out.sink.merge(&job.sink);
+            norm.job_mut(job_index[j]).copy_from_slice(&job.large_steps);
             out.dropped_splats += job.dropped;
             out.non_finite += job.non_finite;
             for (chain, _) in &job.chains {
@@ -724,10 +786,15 @@ where
             out.chains += job.chains.len();
         }
         out.mutations = out.stats.steps;
+        let estimate = norm.estimate();
+        out.b = estimate.b;
+        out.b_standard_error = estimate.standard_error;
+        out.large_step_samples = estimate.large_steps;
+        out.normalization = norm;
         out.splat_scale = if out.mutations == 0 {
             0.0
         } else {
-            boot.b / out.mutations as f64
+            estimate.b / out.mutations as f64
         };
         if out.mutations == 0 {
             out.notes.push(

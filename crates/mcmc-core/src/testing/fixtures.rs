@@ -222,6 +222,10 @@ impl Proposal<Vec<f64>> for LargeStepWalk {
         }
     }
 
+    fn independent_density(&self, component: usize) -> Option<f64> {
+        (component == 1).then(|| self.large_step_density())
+    }
+
     fn log_hastings(&self, j: usize, x: &Vec<f64>, y: &Vec<f64>) -> f64 {
         match j {
             0 => 0.0,

@@ -5,12 +5,17 @@
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
-use super::{unsampled_note, DirectPassStats, RenderOutput, RenderSettings, Run, Unsampled};
+use super::{
+    relative_error, unsampled_note, DirectPassStats, RenderOutput, RenderSettings, Run, Unsampled,
+};
 use crate::bdpt::{BdptOutput, BdptParams};
 use crate::budget::Budget;
+use crate::error::RenderError;
 use crate::mlt::direct::{self, DirectPass};
+use crate::mlt::MltSettings;
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
+use mcmc_core::render_loop::NormalizationMode;
 
 /// A direct-lighting pass's settings, shared by the Markov chain integrators over BDPT paths
 /// (`mmlt` and the `mala*` rows; `pssmlt` keeps the same three settings as its own fields).
@@ -286,6 +291,41 @@ pub fn merge_into(
     output.cancelled |= d.pass.cancelled;
     if let Some(stats) = output.mcmc.as_mut() {
         stats.direct_pass = Some(d.stats);
+        // The pass's light is not scaled by `b`: the brightness error is relative to the
+        // whole image.
+        stats.brightness_standard_error = relative_error(
+            stats.b_standard_error,
+            stats.b + d.pass.image.mean_luminance(),
+        );
         stats.times.direct_pass = d.elapsed;
     }
+}
+
+/// A given normalisation (`--normalization B|FILE`) is the whole image's mean luminance: with
+/// a direct pass the chains render what the pass does not, so their `b` is the given one less
+/// the pass's mean (with a note).
+///
+/// # Errors
+/// [`RenderError::InvalidSetting`] naming `normalization` if nothing is left for the chains.
+pub fn given_normalization(
+    settings: &mut MltSettings,
+    direct: Option<&DirectRun>,
+    notes: &mut Vec<String>,
+) -> Result<(), RenderError> {
+    if let (NormalizationMode::Given(b), Some(d)) = (settings.normalization, direct) {
+        let pass = d.pass.image.mean_luminance();
+        if b - pass <= 0.0 || pass.is_nan() {
+            return Err(RenderError::setting(
+                "normalization",
+                b,
+                "above the direct-lighting pass's mean luminance (the chains render the rest of the light)",
+            ));
+        }
+        notes.push(format!(
+            "normalisation given: b = {b:.6} for the image, {:.6} for the chains after the direct pass's {pass:.6}",
+            b - pass
+        ));
+        settings.normalization = NormalizationMode::Given(b - pass);
+    }
+    Ok(())
 }

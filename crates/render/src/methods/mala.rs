@@ -150,6 +150,7 @@ impl Method for MalaSettings {
         if let Some(spent) = direct_spent {
             mlt_settings.budget = remaining(mlt_settings.budget, spent);
         }
+        direct_pass::given_normalization(&mut mlt_settings, direct.as_ref(), &mut notes)?;
         notes.push(mala_note(&self.config));
         let out = mala::render_from_depth(
             scene,

@@ -114,6 +114,7 @@ impl Method for MmltSettings {
         if let Some(spent) = direct_spent {
             mlt_settings.budget = remaining(mlt_settings.budget, spent);
         }
+        direct_pass::given_normalization(&mut mlt_settings, direct.as_ref(), &mut notes)?;
         let estimator = MltEstimator {
             large_step_mis: self.large_step_mis,
             chain_allocation: self.chain_allocation,

@@ -51,14 +51,14 @@ pub use lqmc::LqmcSettings;
 pub use mala::MalaSettings;
 pub use mmlt::MmltSettings;
 pub use output::{
-    mcmc_notes, mcmc_output, unsampled_note, DirectPassStats, LqmcStats, McmcStats, PhaseTimes,
-    RenderOutput, Unsampled,
+    mcmc_notes, mcmc_output, relative_error, unsampled_note, DirectPassStats, LqmcStats, McmcStats,
+    PhaseTimes, RenderOutput, Unsampled, BRIGHTNESS_TARGET,
 };
 pub use pathmlt::PathMltSettings;
 pub use pssmlt::{PathBase, PssmltSettings};
 pub use pt::{PtSettings, QmcSettings};
 pub use settings::{
-    mlt_budget, remaining, ChainSettings, MethodSettings, RenderSettings,
+    mlt_budget, remaining, validate_normalization, ChainSettings, MethodSettings, RenderSettings,
     AUTO_LARGE_STEP_ESTIMATION, MAX_BOOTSTRAP_SAMPLES, MAX_CHAINS,
 };
 pub use table::{IntegratorInfo, IntegratorKind, INTEGRATORS};

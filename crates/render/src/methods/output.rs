@@ -142,10 +142,24 @@ pub struct DirectPassStats {
 /// of each phase.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct McmcStats {
-    /// The normalisation `b` (bootstrap estimate, or the one given).
+    /// The normalisation `b` the chains' image is scaled with: the bootstrap pooled with
+    /// every large-step candidate (`mcmc_core::render_loop::Normalization`), the bootstrap's
+    /// alone, or the one given.
     pub b: f64,
-    /// Standard error of the bootstrap's `b`.
+    /// Standard error of `b` (0 if given).
     pub b_standard_error: f64,
+    /// The bootstrap's own estimate of `b` (or the sum of a per-depth normalisation given).
+    pub bootstrap_b: f64,
+    /// The bootstrap's standard error.
+    pub bootstrap_standard_error: f64,
+    /// Large-step candidates pooled into `b`.
+    pub large_step_samples: u64,
+    /// True if `b` was given rather than estimated.
+    pub normalization_given: bool,
+    /// The standard error of the image's mean brightness that `b`'s error causes, relative to
+    /// that mean (`b_standard_error / b`; PSSMLT with a direct pass: over `b` plus the pass's
+    /// mean luminance). 0 if `b` was given.
+    pub brightness_standard_error: f64,
     /// Bootstrap samples evaluated.
     pub bootstrap_samples: u64,
     /// The estimate `b_d` of each target (MMLT: path depth); they sum to `b`.
@@ -227,6 +241,11 @@ impl McmcStats {
         Self {
             b: out.b,
             b_standard_error: out.b_standard_error,
+            bootstrap_b: out.bootstrap_b,
+            bootstrap_standard_error: out.bootstrap_standard_error,
+            large_step_samples: out.large_step_samples,
+            normalization_given: out.normalization_given,
+            brightness_standard_error: relative_error(out.b_standard_error, out.b),
             bootstrap_samples: out.bootstrap_samples,
             target_b: out.target_b.clone(),
             target_chains: out.target_chains.clone(),
@@ -247,6 +266,20 @@ impl McmcStats {
     }
 }
 
+/// `error / mean`, 0 for a non-positive mean.
+#[must_use]
+pub fn relative_error(error: f64, mean: f64) -> f64 {
+    if mean > 0.0 {
+        error / mean
+    } else {
+        0.0
+    }
+}
+
+/// The brightness error a render should reach: the standard error of the image's mean
+/// brightness due to the normalisation, relative to it (1 %: 2 % at 95 % confidence).
+pub const BRIGHTNESS_TARGET: f64 = 0.01;
+
 /// The notes every Markov chain render reports: the driver's own, then why the image is black
 /// or the bootstrap's `b` and the acceptance rate, then the automatic large-step estimate.
 #[must_use]
@@ -255,10 +288,23 @@ pub fn mcmc_notes(out: &MltOutput) -> Vec<String> {
     if let Some(msg) = &out.message {
         notes.push(msg.clone());
     } else {
-        notes.push(format!(
-            "bootstrap: b = {:.6} (standard error {:.2e}) from {} samples",
-            out.b, out.b_standard_error, out.bootstrap_samples
-        ));
+        if !out.normalization_given {
+            notes.push(format!(
+                "normalisation: b = {:.6} (standard error {:.2e}, {:.2} %) from {} bootstrap samples{}",
+                out.b,
+                out.b_standard_error,
+                100.0 * relative_error(out.b_standard_error, out.b),
+                out.bootstrap_samples,
+                if out.large_step_samples > 0 {
+                    format!(
+                        " and {} large steps (the bootstrap alone: {:.6}, standard error {:.2e})",
+                        out.large_step_samples, out.bootstrap_b, out.bootstrap_standard_error
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
         notes.push(format!(
             "acceptance rate {:.3} over {} mutations",
             out.stats.acceptance_rate(),

@@ -2,12 +2,13 @@
 //! perturbation mixed with the bidirectional mutation, with the perturbation's scale fixed or
 //! adapted per region (Otsu et al. 2018; [`crate::mlt::pathmlt`]).
 
+use mcmc_core::render_loop::NormalizationMode;
 use pathspace::regional::RegionalAdaptParams;
 use pathspace::PerturbationKind;
 
 use super::{
-    emitter_notes, mcmc_output, mlt_budget, IntegratorKind, Method, RenderOutput, RenderSettings,
-    Run, MAX_BOOTSTRAP_SAMPLES, MAX_CHAINS,
+    emitter_notes, mcmc_output, mlt_budget, validate_normalization, IntegratorKind, Method,
+    RenderOutput, RenderSettings, Run, MAX_BOOTSTRAP_SAMPLES, MAX_CHAINS,
 };
 use crate::error::RenderError;
 use crate::mlt::pathmlt::{adapt_params, render_adaptive_with_params, PathAdapt, PATHMLT_SIGMA};
@@ -33,6 +34,9 @@ pub struct PathMltSettings {
     pub refine_for_mutations: Option<u64>,
     /// RA-QUADTREE: `M_split` instead of the scheduled one (`None`: the schedule's).
     pub split_after_visits: Option<u64>,
+    /// How the image's normalisation `b` is estimated (as [`super::ChainSettings`]'s; path-space
+    /// MLT makes no large steps, so the default is the bootstrap's estimate), or a given `b`.
+    pub normalization: NormalizationMode,
 }
 
 impl Default for PathMltSettings {
@@ -56,6 +60,7 @@ impl PathMltSettings {
             adapt,
             refine_for_mutations: None,
             split_after_visits: None,
+            normalization: NormalizationMode::Pooled,
         }
     }
 }
@@ -79,7 +84,7 @@ impl Method for PathMltSettings {
         if self.split_after_visits == Some(0) {
             return Err(RenderError::setting("split-after-visits", 0, ">= 1"));
         }
-        Ok(())
+        validate_normalization(self.normalization)
     }
 
     fn render(
@@ -99,6 +104,7 @@ impl Method for PathMltSettings {
             streams: 1,
             stage_map: false,
             shard: run.shard,
+            normalization: self.normalization,
         };
         let mut params = adapt_params(self.adapt, &mlt_settings);
         if self.adapt == PathAdapt::Quadtree {

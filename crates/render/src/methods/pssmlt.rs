@@ -201,6 +201,7 @@ impl Method for PssmltSettings {
         if let Some(spent) = spent {
             mlt_settings.budget = remaining(mlt_settings.budget, spent);
         }
+        direct_pass::given_normalization(&mut mlt_settings, direct.as_ref(), &mut notes)?;
         let estimator = MltEstimator {
             large_step_mis: self.large_step_mis,
             chain_allocation: ChainAllocation::Joint,

@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+use mcmc_core::render_loop::NormalizationMode;
 use pss::{KelemenParams, SmallMutation};
 
 use super::{
@@ -171,6 +172,11 @@ pub struct ChainSettings {
     pub large_step: LargeStepMode,
     /// The small-step kernel (default Kelemen with s1 = 1/1024, s2 = 1/64).
     pub small_step: SmallMutation,
+    /// How the image's normalisation `b` is estimated: the bootstrap pooled with every
+    /// large-step candidate (the default), the bootstrap alone, or a given `b` (the mean
+    /// luminance the chains' image should have: comparisons on one footing). See
+    /// `mcmc_core::render_loop::Normalization`.
+    pub normalization: NormalizationMode,
 }
 
 impl Default for ChainSettings {
@@ -199,6 +205,7 @@ impl ChainSettings {
             bootstrap_samples: 100_000,
             large_step: LargeStepMode::Fixed(0.3),
             small_step: SmallMutation::Kelemen(KelemenParams::kelemen2002()),
+            normalization: NormalizationMode::Pooled,
         }
     }
 
@@ -238,7 +245,7 @@ impl ChainSettings {
         if !(0.0..=1.0).contains(&p) {
             return Err(RenderError::setting("large-step", p, "auto or 0..=1"));
         }
-        Ok(())
+        validate_normalization(self.normalization)
     }
 
     /// The MCMC driver's settings for shard `shard` of a render of `common`'s size, budget
@@ -260,9 +267,26 @@ impl ChainSettings {
             large_step: self.large_step,
             seed: common.seed,
             streams,
+            normalization: self.normalization,
             stage_map,
             shard,
         }
+    }
+}
+
+/// Checks a given normalisation.
+///
+/// # Errors
+/// [`RenderError::InvalidSetting`] naming `normalization` for a given `b` that is not finite
+/// and positive.
+pub fn validate_normalization(mode: NormalizationMode) -> Result<(), RenderError> {
+    match mode {
+        NormalizationMode::Given(b) if !(b.is_finite() && b > 0.0) => Err(RenderError::setting(
+            "normalization",
+            b,
+            "pooled, bootstrap, a number > 0 or an image with a positive mean",
+        )),
+        _ => Ok(()),
     }
 }
 

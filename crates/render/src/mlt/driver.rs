@@ -13,7 +13,7 @@
 //!     width: 16, height: 16, chains: 16, bootstrap_samples: 10_000,
 //!     budget: MltBudget::MutationsPerPixel(8.0), large_step: LargeStepMode::Fixed(0.3),
 //!     seed: 1, streams: PATH_STREAMS, stage_map: false,
-//!     shard: render::shard::Shard::WHOLE,
+//!     shard: render::shard::Shard::WHOLE, normalization: Default::default(),
 //! };
 //! let small = SmallStep::new(SmallMutation::Kelemen(KelemenParams::kelemen2002()));
 //! let out = MltDriver::new(&targets, &settings)
@@ -158,6 +158,7 @@ impl<'a, T, S> MltDriver<'a, T, S> {
             chain_allocation: self.estimator.chain_allocation,
             round_mutations: self.round_mutations.unwrap_or(defaults.round_mutations),
             shard: self.settings.shard,
+            normalization: self.settings.normalization,
             ..defaults
         }
     }

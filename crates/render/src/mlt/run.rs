@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use mcmc_core::controller::LargeStepEstimate;
-use mcmc_core::render_loop::{ChainAllocation, ChainSlot, LoopOutput, Shard};
+use mcmc_core::render_loop::{ChainAllocation, ChainSlot, LoopOutput, NormalizationMode, Shard};
 use mcmc_core::stats::AcceptanceStats;
 
 use super::StagedSplats;
@@ -65,6 +65,13 @@ pub struct MltSettings {
     /// The part of the fixed chain-job list to render ([`Shard::WHOLE`]: all of it); a
     /// sharded run returns its accumulators in [`MltOutput::component`] ([`crate::shard`]).
     pub shard: Shard,
+    /// How the image's normalisation `b` is estimated (default [`NormalizationMode::Pooled`]:
+    /// the bootstrap with every large-step candidate of the chains,
+    /// `mcmc_core::render_loop::Normalization`), or the caller's `b`
+    /// ([`NormalizationMode::Given`]: the chains' image then has that mean luminance; it
+    /// also overrides the sum of [`super::MltDriver::normalized`]'s per-target values, which
+    /// still allocate the chains).
+    pub normalization: NormalizationMode,
 }
 
 /// What an MCMC render produced.
@@ -72,10 +79,20 @@ pub struct MltSettings {
 pub struct MltOutput {
     /// The image (black if nothing carried light).
     pub image: Image,
-    /// The normalisation `b` from the bootstrap.
+    /// The normalisation `b` the image is scaled with: by default the bootstrap pooled with
+    /// every large-step candidate (`mcmc_core::render_loop::Normalization`), or the one given.
     pub b: f64,
-    /// Standard error of `b`.
+    /// Standard error of `b` (0 for a given `b`).
     pub b_standard_error: f64,
+    /// The bootstrap's own estimate of `b` (or the sum of a per-target normalisation given).
+    pub bootstrap_b: f64,
+    /// The bootstrap's standard error.
+    pub bootstrap_standard_error: f64,
+    /// Large-step candidates pooled into `b`.
+    pub large_step_samples: u64,
+    /// True if `b` was given ([`MltSettings::normalization`] or
+    /// [`super::MltDriver::normalized`]) rather than estimated.
+    pub normalization_given: bool,
     /// Bootstrap samples evaluated.
     pub bootstrap_samples: u64,
     /// The bootstrap estimate `b_d` of each target (MMLT: depth); they sum to `b`.
@@ -196,6 +213,10 @@ pub(super) fn finish<Sh>(
                 image: Image::new(w, h),
                 b: 0.0,
                 b_standard_error: 0.0,
+                bootstrap_b: 0.0,
+                bootstrap_standard_error: 0.0,
+                large_step_samples: 0,
+                normalization_given: false,
                 bootstrap_samples: 0,
                 target_b: Vec::new(),
                 target_chains: Vec::new(),
@@ -236,6 +257,10 @@ pub(super) fn finish<Sh>(
         },
         b: out.b,
         b_standard_error: out.b_standard_error,
+        bootstrap_b: out.bootstrap_b,
+        bootstrap_standard_error: out.bootstrap_standard_error,
+        large_step_samples: out.large_step_samples,
+        normalization_given: matches!(out.normalization.mode, NormalizationMode::Given(_)),
         bootstrap_samples: out.bootstrap_samples,
         target_b: out.target_b,
         target_chains: out.target_chains,
@@ -254,7 +279,7 @@ pub(super) fn finish<Sh>(
         chains_time: out.chains_time,
         component: (!settings.shard.is_whole()).then(|| Component::Chains {
             grid: (*out.sink.image).clone(),
-            b: out.b,
+            normalization: out.normalization,
             mutations: out.mutations,
         }),
     }

@@ -9,14 +9,22 @@
 use std::io::Read;
 use std::path::Path;
 
-use mcmc_core::render_loop::{ExactSplatGrid, Shard};
+use mcmc_core::render_loop::{
+    ExactSplatGrid, LargeStepSums, Normalization, NormalizationMode, Shard,
+};
 
 use super::{Component, Partial};
 
 /// The file extension of part files.
 pub const PART_EXTENSION: &str = "clpart";
 
-const MAGIC: &[u8] = b"chainlight-part 1\n";
+const MAGIC: &[u8] = b"chainlight-part 2\n";
+
+/// Most targets (MMLT depths) a part's normalisation may hold.
+const MAX_TARGETS: u64 = 1024;
+
+/// Most jobs a part's normalisation may hold (the render loop's limit).
+const MAX_JOBS: u64 = 4096;
 /// Largest accepted image side in a part (the render's own limit).
 const MAX_SIDE: usize = 16_384;
 /// Largest accepted header.
@@ -160,10 +168,14 @@ pub fn write_part(path: &Path, header: &PartHeader, partial: &Partial) -> Result
                 }
                 buf.extend_from_slice(&light_samples.to_le_bytes());
             }
-            Component::Chains { grid, b, mutations } => {
+            Component::Chains {
+                grid,
+                normalization,
+                mutations,
+            } => {
                 buf.push(1);
                 put_grid(&mut buf, grid);
-                buf.extend_from_slice(&b.to_le_bytes());
+                put_normalization(&mut buf, normalization);
                 buf.extend_from_slice(&mutations.to_le_bytes());
             }
             Component::Mean { grid, divisor } => {
@@ -186,6 +198,31 @@ fn put_grid(buf: &mut Vec<u8>, grid: &ExactSplatGrid) {
         for v in grid.raw(i) {
             buf.extend_from_slice(&v.to_le_bytes());
         }
+    }
+}
+
+/// The normalisation's mode, bootstrap and per-job large-step sums (every `f64` by its bits).
+fn put_normalization(buf: &mut Vec<u8>, n: &Normalization) {
+    match n.mode {
+        NormalizationMode::Pooled => buf.push(0),
+        NormalizationMode::Bootstrap => buf.push(1),
+        NormalizationMode::Given(b) => {
+            buf.push(2);
+            buf.extend_from_slice(&b.to_le_bytes());
+        }
+    }
+    buf.extend_from_slice(&(n.targets() as u64).to_le_bytes());
+    buf.extend_from_slice(&(n.jobs as u64).to_le_bytes());
+    for d in 0..n.targets() {
+        buf.extend_from_slice(&n.bootstrap_b[d].to_le_bytes());
+        buf.extend_from_slice(&n.bootstrap_variance[d].to_le_bytes());
+        buf.extend_from_slice(&n.bootstrap_samples[d].to_le_bytes());
+    }
+    buf.extend_from_slice(&n.bootstrap_standard_error.to_le_bytes());
+    for s in &n.large_steps {
+        buf.extend_from_slice(&s.count.to_le_bytes());
+        buf.extend_from_slice(&s.sum.to_le_bytes());
+        buf.extend_from_slice(&s.sum_sq.to_le_bytes());
     }
 }
 
@@ -231,6 +268,38 @@ impl Reader<'_> {
         }
         Ok(grid)
     }
+    fn normalization(&mut self) -> Result<Normalization, String> {
+        let mode = match self.u8()? {
+            0 => NormalizationMode::Pooled,
+            1 => NormalizationMode::Bootstrap,
+            2 => NormalizationMode::Given(self.f64()?),
+            k => return Err(format!("unknown normalisation mode {k}")),
+        };
+        let (targets, jobs) = (self.u64()?, self.u64()?);
+        if targets > MAX_TARGETS || jobs > MAX_JOBS {
+            return Err(format!(
+                "normalisation of {targets} targets and {jobs} jobs"
+            ));
+        }
+        let (targets, jobs) = (targets as usize, jobs as usize);
+        self.check_left(targets * 24 + 8 + targets * jobs * 24)?;
+        let (mut b, mut variance, mut samples) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..targets {
+            b.push(self.f64()?);
+            variance.push(self.f64()?);
+            samples.push(self.u64()?);
+        }
+        let mut n = Normalization::new(mode, b, variance, samples, self.f64()?, jobs);
+        for s in &mut n.large_steps {
+            *s = LargeStepSums {
+                count: self.u64()?,
+                sum: self.f64()?,
+                sum_sq: self.f64()?,
+            };
+        }
+        Ok(n)
+    }
+
     fn check_left(&self, n: usize) -> Result<(), String> {
         if self.bytes.len() - self.at < n {
             Err("truncated (the file ends inside its data)".into())
@@ -318,7 +387,7 @@ fn parse(bytes: &[u8]) -> Result<(PartHeader, Partial), String> {
             }
             1 => Component::Chains {
                 grid: r.grid(width, height)?,
-                b: r.f64()?,
+                normalization: r.normalization()?,
                 mutations: r.u64()?,
             },
             2 => {
@@ -365,7 +434,18 @@ mod tests {
                 components: vec![
                     Component::Chains {
                         grid,
-                        b: 0.5,
+                        normalization: {
+                            let mut n = Normalization::new(
+                                NormalizationMode::Pooled,
+                                vec![0.5, 0.25],
+                                vec![1e-4, 2e-4],
+                                vec![1000, 1000],
+                                0.01,
+                                3,
+                            );
+                            n.job_mut(1)[1].push(0.75);
+                            n
+                        },
                         mutations: 99,
                     },
                     Component::Film {
@@ -390,6 +470,10 @@ mod tests {
         assert_eq!(h2.settings, "S {  a: 1 }");
         assert_eq!(h2.shard, header.shard);
         assert_eq!(p2.image().0.pixels, partial.image().0.pixels);
+        assert_eq!(
+            format!("{:?}", p2.components[0]),
+            format!("{:?}", partial.components[0])
+        );
         // Truncated by one byte, and one byte flipped: refused, no panic.
         let bytes = std::fs::read(&path).unwrap();
         for bad in [bytes[..bytes.len() - 1].to_vec(), {

@@ -23,7 +23,7 @@ mod file;
 pub use file::{fingerprint, read_part, write_part, PartHeader, PART_EXTENSION};
 pub use mcmc_core::render_loop::Shard;
 
-use mcmc_core::render_loop::ExactSplatGrid;
+use mcmc_core::render_loop::{ExactSplatGrid, Normalization};
 
 use crate::film::{Film, Filter};
 use crate::image::{add_into, Image};
@@ -43,12 +43,14 @@ pub enum Component {
         /// Camera samples taken (the light layer's normaliser).
         light_samples: u64,
     },
-    /// Markov chain splats: `grid * (b / mutations) * pixels` (Kelemen et al. 2002, eq. 5).
+    /// Markov chain splats: `grid * (b / mutations) * pixels` (Kelemen et al. 2002, eq. 5),
+    /// `b` the estimate of the parts' normalisations added ([`Normalization::estimate`]).
     Chains {
         /// The splat sums `Σ w rgb / f`.
         grid: ExactSplatGrid,
-        /// The normalisation `b` (equal in every part).
-        b: f64,
+        /// What `b` rests on: the bootstrap (equal in every part) and each job's large-step
+        /// sums (zero for the jobs a part does not own).
+        normalization: Normalization,
         /// Mutations counted.
         mutations: u64,
     },
@@ -114,11 +116,15 @@ impl Component {
                 };
                 film.image_checked(scale)
             }
-            Component::Chains { grid, b, mutations } => {
+            Component::Chains {
+                grid,
+                normalization,
+                mutations,
+            } => {
                 let splat_scale = if *mutations == 0 {
                     0.0
                 } else {
-                    b / *mutations as f64
+                    normalization.estimate().b / *mutations as f64
                 };
                 grid_image(grid, splat_scale * pixels)
             }
@@ -168,16 +174,22 @@ impl Component {
                 Ok(())
             }
             (
-                Component::Chains { grid, b, mutations },
+                Component::Chains {
+                    grid,
+                    normalization,
+                    mutations,
+                },
                 Component::Chains {
                     grid: g2,
-                    b: b2,
+                    normalization: n2,
                     mutations: m2,
                 },
             ) => {
-                if b.to_bits() != b2.to_bits() {
+                if let Err(e) = normalization.add(n2) {
                     return Err(format!(
-                        "the MCMC normalisation differs ({b} vs {b2}): the parts are not of one render"
+                        "the MCMC normalisation differs (bootstrap b {} vs {}; {e}): the parts are not of one render",
+                        normalization.bootstrap_b.iter().sum::<f64>(),
+                        n2.bootstrap_b.iter().sum::<f64>()
                     ));
                 }
                 add_grid(grid, g2)?;
