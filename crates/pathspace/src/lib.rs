@@ -47,10 +47,12 @@
 //! ```
 
 pub mod analytic;
+mod bidir_sampler;
 mod bidirectional;
 mod combine;
 mod error;
 mod independence;
+mod lightside;
 mod path;
 pub mod perturb;
 pub mod regional;
@@ -59,6 +61,7 @@ mod scene;
 mod target;
 mod vec3;
 
+pub use bidir_sampler::{BidirectionalSampler, BidirectionalSamplerParams};
 pub use bidirectional::{BidirectionalMutation, BidirectionalParams};
 pub use combine::{ra_mixture, PathMutation, PerturbOrGlobal};
 pub use error::PathspaceError;
