@@ -109,11 +109,41 @@ pub(crate) fn snell_jacobian<S: Bsdfs + ?Sized>(
     ratio2 * cos_o / cos_i
 }
 
+/// One step of a light random walk at `p`: from an emitter point (`toward_light == None`) an
+/// emission direction, else a BSDF direction sampled with the direction toward the light-side
+/// neighbour `toward_light` as `wo`. Returns the lobe chosen at `p` (for its specular flag) and
+/// the hit, or `None` on failure (absorbed, missed the scene).
+pub(crate) fn light_step<S: PathScene + ?Sized, R: Rng + ?Sized>(
+    scene: &S,
+    rng: &mut R,
+    p: &SurfacePoint,
+    toward_light: Option<Vec3>,
+) -> Option<(Option<SpecularLobe>, SurfacePoint)> {
+    let (lobe, dir) = match toward_light {
+        None => {
+            let u = [rng.random(), rng.random()];
+            match scene.sample_emission_direction(p, u) {
+                Some((w, pdf)) if pdf > 0.0 => (None, w),
+                _ => return None,
+            }
+        }
+        Some(neighbour) => {
+            let wo = direction(p.position, neighbour);
+            let u = [rng.random(), rng.random(), rng.random()];
+            let s = scene.sample(p, wo, u)?;
+            if s.pdf.is_nan() || s.pdf <= 0.0 {
+                return None;
+            }
+            (s.lobe, s.wi)
+        }
+    };
+    let hit = scene.intersect(p.position, dir)?;
+    Some((lobe, hit))
+}
+
 /// Extends a light random walk whose vertices are stored in *light order* at
-/// `path.vertices[start..]` (`start` holds the emitter point): from the last vertex, samples an
-/// emission direction (at the emitter) or a BSDF direction with the light-side direction as
-/// `wo` (setting the vertex's specular flag to the chosen lobe), and pushes the hit. Returns
-/// false on failure.
+/// `path.vertices[start..]` (`start` holds the emitter point) by one [`light_step`] from the
+/// last vertex (setting its specular flag) and pushes the hit. Returns false on failure.
 pub(crate) fn extend_light_walk<S: PathScene + ?Sized, R: Rng + ?Sized>(
     scene: &S,
     rng: &mut R,
@@ -121,28 +151,11 @@ pub(crate) fn extend_light_walk<S: PathScene + ?Sized, R: Rng + ?Sized>(
     start: usize,
 ) -> bool {
     let i = path.vertices.len() - 1;
-    let v = path.vertices[i];
-    let dir = if i == start {
-        let u = [rng.random(), rng.random()];
-        match scene.sample_emission_direction(&v.point, u) {
-            Some((w, pdf)) if pdf > 0.0 => w,
-            _ => return false,
-        }
-    } else {
-        let wo = direction(v.position(), path.vertices[i - 1].position());
-        let u = [rng.random(), rng.random(), rng.random()];
-        let Some(s) = scene.sample(&v.point, wo, u) else {
-            return false;
-        };
-        if s.pdf.is_nan() || s.pdf <= 0.0 {
-            return false;
-        }
-        path.vertices[i].specular = s.lobe;
-        s.wi
-    };
-    let Some(hit) = scene.intersect(v.position(), dir) else {
+    let toward = (i > start).then(|| path.vertices[i - 1].position());
+    let Some((lobe, hit)) = light_step(scene, rng, &path.vertices[i].point, toward) else {
         return false;
     };
+    path.vertices[i].specular = lobe;
     path.vertices.push(Vertex {
         point: hit,
         specular: None,

@@ -148,7 +148,14 @@ fn ra_mixture_multi_chain() {
 }
 
 fn bidirectional(scene: &AnalyticScene) -> BidirectionalMutation<'_, AnalyticScene> {
-    BidirectionalMutation::new(scene, BidirectionalParams { max_segments: 6 }).unwrap()
+    BidirectionalMutation::new(
+        scene,
+        BidirectionalParams {
+            max_segments: 6,
+            ..BidirectionalParams::default()
+        },
+    )
+    .unwrap()
 }
 
 #[test]

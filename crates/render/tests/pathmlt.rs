@@ -119,7 +119,14 @@ fn varying_sigma(p: &Path) -> [f64; 2] {
 fn bidirectional<'a>(
     view: &'a PathSpaceScene<'a>,
 ) -> BidirectionalMutation<'a, PathSpaceScene<'a>> {
-    BidirectionalMutation::new(view, BidirectionalParams { max_segments: 6 }).unwrap()
+    BidirectionalMutation::new(
+        view,
+        BidirectionalParams {
+            max_segments: 6,
+            ..BidirectionalParams::default()
+        },
+    )
+    .unwrap()
 }
 
 #[test]

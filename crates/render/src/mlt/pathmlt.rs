@@ -12,9 +12,10 @@ use pathspace::regional::{
     RegionalSigmas, ScreenPartition, SharedRegionalAdaptation, SharedSigmas,
 };
 use pathspace::{
-    ra_mixture, BidirectionalMutation, BidirectionalParams, FixedScale, IndependentSampler, Path,
-    PathContribution, PathMutation, PathTarget, PerturbOrGlobal, Perturbation, PerturbationKind,
-    ScaleSource, UnidirectionalParams, UnidirectionalSampler,
+    ra_mixture, BidirectionalMutation, BidirectionalParams, BidirectionalSampler,
+    BidirectionalSamplerParams, FixedScale, IndependentSampler, Path, PathContribution,
+    PathMutation, PathTarget, PerturbOrGlobal, Perturbation, PerturbationKind, ScaleSource,
+    UnidirectionalParams, UnidirectionalSampler,
 };
 use rand::SeedableRng;
 
@@ -156,13 +157,15 @@ impl<Smp: IndependentSampler + Sync> IndependentStates<Path> for IndependentPath
     }
 }
 
-/// The mutation of pathmlt: a perturbation and the bidirectional mutation, 0.5 each, the
-/// bidirectional mutation where the perturbation cannot apply (RA paper, section 8.1).
+/// The global move of pathmlt: Veach and Guibas' bidirectional mutation (section 5.2) with
+/// eye-side and light-side regeneration, so that one move reaches every path a bidirectional
+/// path tracer reaches (deleting the whole path regenerates it by any strategy).
+pub type GlobalMutation<'a> = BidirectionalMutation<'a, PathSpaceScene<'a>>;
+
+/// The mutation of pathmlt: a perturbation and the global move ([`GlobalMutation`]), 0.5 each,
+/// the global move where the perturbation cannot apply (RA paper, section 8.1).
 pub type PathMltMutation<'a> = Mixture<
-    PathMutation<
-        Perturbation<'a, PathSpaceScene<'a>, FixedScale>,
-        BidirectionalMutation<'a, PathSpaceScene<'a>>,
-    >,
+    PathMutation<Perturbation<'a, PathSpaceScene<'a>, FixedScale>, GlobalMutation<'a>>,
     PerturbOrGlobal,
 >;
 
@@ -178,12 +181,32 @@ pub fn max_segments(max_depth: u32) -> Result<usize, RenderError> {
     Ok(max_depth as usize + 1)
 }
 
-/// The independent sampler of the bootstrap: `pathspace::UnidirectionalSampler` with paths of
-/// `1..=max_segments` edges and connection probability 1/2.
+/// The independent sampler of the bootstrap and of the independence mutation:
+/// `pathspace::BidirectionalSampler` with paths of `1..=max_segments` edges, every strategy of
+/// a bidirectional path tracer (eye and light subpaths of every length, joined by an edge or
+/// by hitting the emitter), so `f / p` is BDPT's balance-heuristic estimate.
 ///
 /// # Errors
 /// As [`max_segments`].
 pub fn independent_sampler<'a>(
+    scene: &'a PathSpaceScene<'a>,
+    max_depth: u32,
+) -> Result<BidirectionalSampler<'a, PathSpaceScene<'a>>, RenderError> {
+    let params = BidirectionalSamplerParams {
+        max_segments: max_segments(max_depth)?,
+    };
+    BidirectionalSampler::new(scene, params)
+        .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))
+}
+
+/// The eye-side sampler pathmlt used before [`independent_sampler`]:
+/// `pathspace::UnidirectionalSampler` with paths of `1..=max_segments` edges and connection
+/// probability 1/2. It cannot reach paths whose light arrives only through specular vertices
+/// seen from a diffuse one (`L S+ D E` with a small light): kept for comparisons.
+///
+/// # Errors
+/// As [`max_segments`].
+pub fn unidirectional_sampler<'a>(
     scene: &'a PathSpaceScene<'a>,
     max_depth: u32,
 ) -> Result<UnidirectionalSampler<'a, PathSpaceScene<'a>>, RenderError> {
@@ -218,19 +241,34 @@ pub type AdaptPartition<'a> = PathPartition<&'a PathSpaceScene<'a>>;
 pub type AdaptiveMutation<'a> = Mixture<
     PathMutation<
         Perturbation<'a, PathSpaceScene<'a>, SharedSigmas<AdaptPartition<'a>>>,
-        BidirectionalMutation<'a, PathSpaceScene<'a>>,
+        GlobalMutation<'a>,
     >,
     PerturbOrGlobal,
 >;
 
 /// The mutation of pathmlt with the perturbation's scales from `Sc`.
 type ScaledMutation<'a, Sc> = Mixture<
-    PathMutation<
-        Perturbation<'a, PathSpaceScene<'a>, Sc>,
-        BidirectionalMutation<'a, PathSpaceScene<'a>>,
-    >,
+    PathMutation<Perturbation<'a, PathSpaceScene<'a>, Sc>, GlobalMutation<'a>>,
     PerturbOrGlobal,
 >;
+
+/// pathmlt's global move ([`GlobalMutation`]) for paths of at most `max_depth + 1` edges.
+///
+/// # Errors
+/// As [`max_segments`].
+pub fn global_mutation<'a>(
+    scene: &'a PathSpaceScene<'a>,
+    max_depth: u32,
+) -> Result<GlobalMutation<'a>, RenderError> {
+    BidirectionalMutation::new(
+        scene,
+        BidirectionalParams {
+            max_segments: max_segments(max_depth)?,
+            ..BidirectionalParams::default()
+        },
+    )
+    .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))
+}
 
 /// The mutation of pathmlt with `kind` of perturbation whose scales come from `scale`.
 fn mutation_with_scale<'a, Sc: ScaleSource>(
@@ -239,15 +277,9 @@ fn mutation_with_scale<'a, Sc: ScaleSource>(
     scale: Sc,
     max_depth: u32,
 ) -> Result<ScaledMutation<'a, Sc>, RenderError> {
-    let bidirectional = BidirectionalMutation::new(
-        scene,
-        BidirectionalParams {
-            max_segments: max_segments(max_depth)?,
-        },
-    )
-    .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))?;
+    let global = global_mutation(scene, max_depth)?;
     let perturbation = Perturbation::new(scene, kind, scale);
-    ra_mixture(kind, perturbation, bidirectional)
+    ra_mixture(kind, perturbation, global)
         .map_err(|e| RenderError::setting("perturbation", e, "lens|multichain"))
 }
 
