@@ -458,7 +458,14 @@ impl<S: PathScene + ?Sized> Proposal<Path> for BidirectionalMutation<'_, S> {
         if !self.propose_path(x, y, rng) {
             return Proposed::Invalid { component: 0 };
         }
-        Proposed::hastings(self.log_transition_density(y, x) - self.log_transition_density(x, y))
+        let forward = self.log_transition_density(x, y);
+        if !forward.is_finite() {
+            // Drawn, yet of density 0 when re-evaluated from the two paths (a direction at
+            // grazing incidence rounding to the other side of a surface): a null event,
+            // rejected rather than reported with an undefined Hastings term.
+            return Proposed::Invalid { component: 0 };
+        }
+        Proposed::hastings(self.log_transition_density(y, x) - forward)
     }
 
     fn log_q(&self, from: &Path, to: &Path) -> f64 {
