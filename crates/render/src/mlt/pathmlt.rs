@@ -13,9 +13,9 @@ use pathspace::regional::{
 };
 use pathspace::{
     ra_mixture, BidirectionalMutation, BidirectionalParams, BidirectionalSampler,
-    BidirectionalSamplerParams, FixedScale, IndependentSampler, Path, PathContribution,
-    PathMutation, PathTarget, PerturbOrGlobal, Perturbation, PerturbationKind, ScaleSource,
-    UnidirectionalParams, UnidirectionalSampler,
+    BidirectionalSamplerParams, Blend, FixedScale, IndependenceMutation, IndependentSampler, Path,
+    PathContribution, PathMutation, PathTarget, PerturbOrGlobal, Perturbation, PerturbationKind,
+    ScaleSource, UnidirectionalParams, UnidirectionalSampler,
 };
 use rand::SeedableRng;
 
@@ -158,9 +158,18 @@ impl<Smp: IndependentSampler + Sync> IndependentStates<Path> for IndependentPath
 }
 
 /// The global move of pathmlt: Veach and Guibas' bidirectional mutation (section 5.2) with
-/// eye-side and light-side regeneration, so that one move reaches every path a bidirectional
-/// path tracer reaches (deleting the whole path regenerates it by any strategy).
-pub type GlobalMutation<'a> = BidirectionalMutation<'a, PathSpaceScene<'a>>;
+/// eye-side and light-side regeneration, blended ([`pathspace::Blend`], probability
+/// [`GLOBAL_INDEPENDENCE_PROBABILITY`]) with the independence mutation drawing from
+/// [`independent_sampler`]: one move reaches every path a bidirectional path tracer reaches,
+/// and small isolated features (a light seen through two mirrors) are proposed in proportion
+/// to the sampler's density rather than only through long deletions.
+pub type GlobalMutation<'a> = Blend<
+    BidirectionalMutation<'a, PathSpaceScene<'a>>,
+    IndependenceMutation<BidirectionalSampler<'a, PathSpaceScene<'a>>>,
+>;
+
+/// Probability of the independence mutation within pathmlt's [`GlobalMutation`].
+pub const GLOBAL_INDEPENDENCE_PROBABILITY: f64 = 0.5;
 
 /// The mutation of pathmlt: a perturbation and the global move ([`GlobalMutation`]), 0.5 each,
 /// the global move where the perturbation cannot apply (RA paper, section 8.1).
@@ -260,14 +269,17 @@ pub fn global_mutation<'a>(
     scene: &'a PathSpaceScene<'a>,
     max_depth: u32,
 ) -> Result<GlobalMutation<'a>, RenderError> {
-    BidirectionalMutation::new(
+    let bidirectional = BidirectionalMutation::new(
         scene,
         BidirectionalParams {
             max_segments: max_segments(max_depth)?,
             ..BidirectionalParams::default()
         },
     )
-    .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))
+    .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))?;
+    let independence = IndependenceMutation::new(independent_sampler(scene, max_depth)?);
+    Blend::new(bidirectional, independence, GLOBAL_INDEPENDENCE_PROBABILITY)
+        .map_err(|e| RenderError::setting("global mutation", e, "a probability in [0, 1]"))
 }
 
 /// The mutation of pathmlt with `kind` of perturbation whose scales come from `scale`.
