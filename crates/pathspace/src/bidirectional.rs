@@ -213,7 +213,7 @@ impl<'a, S: PathScene + ?Sized> BidirectionalMutation<'a, S> {
         let scene = self.scene;
         let xv = &x.vertices;
         let k = xv.len();
-        if k < 2 || k > MAX_SEGMENTS + 1 {
+        if !(2..=MAX_SEGMENTS + 1).contains(&k) {
             return false;
         }
         // 1. (l, m) by inversion of the deletion weights.
