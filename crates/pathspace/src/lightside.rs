@@ -191,17 +191,38 @@ pub(crate) fn log_light_scatter_density<S: PathScene + ?Sized>(
         let to_light = direction(p.position, v[j + 1].position());
         match v[j].specular {
             Some(lobe) => {
-                let j_light = solid_angle_to_area(p.position, &v[j + 1].point);
-                if j_light > 0.0 {
-                    scene.specular_pdf(p, to_light, lobe) * j_eye / j_light
-                        * scene.specular_jacobian(p, to_eye, lobe)
-                } else {
-                    0.0
-                }
+                scene.specular_pdf(p, to_light, lobe) * log_specular_conversion(scene, v, j).exp()
             }
             None => scene.pdf(p, to_light, to_eye) * j_eye,
         }
     };
+    if q.is_nan() {
+        f64::NEG_INFINITY
+    } else {
+        q.ln()
+    }
+}
+
+/// `ln` of the Jacobian from a light walk's measure to [`Path`]'s across the specular vertex
+/// `v[j]` (`1 <= j < len - 1`): `J(x_j -> x_{j-1}) / J(x_j -> x_{j+1}) dω_{j+1} / dω_{j-1}`
+/// (see [`log_light_scatter_density`]); `NEG_INFINITY` if `v[j]` is not specular or a factor
+/// vanishes.
+pub(crate) fn log_specular_conversion<S: PathScene + ?Sized>(
+    scene: &S,
+    v: &[Vertex],
+    j: usize,
+) -> f64 {
+    let Some(lobe) = v[j].specular else {
+        return f64::NEG_INFINITY;
+    };
+    let p = &v[j].point;
+    let j_light = solid_angle_to_area(p.position, &v[j + 1].point);
+    if !(j_light > 0.0) {
+        return f64::NEG_INFINITY;
+    }
+    let j_eye = solid_angle_to_area(p.position, &v[j - 1].point);
+    let to_eye = direction(p.position, v[j - 1].position());
+    let q = j_eye / j_light * scene.specular_jacobian(p, to_eye, lobe);
     if q.is_nan() {
         f64::NEG_INFINITY
     } else {
