@@ -3,7 +3,7 @@
 
 use mcmc_core::proposal::{Mixture, Selection};
 use mcmc_core::{McmcError, Proposal, Proposed};
-use rand::{Rng, RngExt};
+use rand::Rng;
 
 use crate::path::Path;
 use crate::perturb::{eye_subpath_end, PerturbationKind};
@@ -110,92 +110,28 @@ pub fn ra_mixture<P, G>(
     )
 }
 
-/// Two global mutations blended into one proposal: `second` with probability
-/// `second_probability`, else `first`, with the blend's own transition density
-/// `T(y | x) = (1 - q) T_1(y | x) + q T_2(y | x)` in the Hastings term (so, unlike a
-/// component-labelled [`Mixture`], it can sit inside one as a single component).
-///
-/// pathmlt blends the bidirectional mutation with the independence mutation of a
-/// bidirectional sampler: the latter reaches, in one step, paths whose share of the image is
-/// too small for deletions of short subpaths to find.
-///
-/// # Example
-/// ```
-/// use mcmc_core::Proposal;
-/// use pathspace::analytic::AnalyticScene;
-/// use pathspace::{
-///     BidirectionalMutation, BidirectionalParams, BidirectionalSampler,
-///     BidirectionalSamplerParams, Blend, IndependenceMutation,
-/// };
-///
-/// let scene = AnalyticScene::test_box().unwrap();
-/// let sampler = BidirectionalSampler::new(&scene, BidirectionalSamplerParams::default()).unwrap();
-/// let blend = Blend::new(
-///     BidirectionalMutation::new(&scene, BidirectionalParams::default()).unwrap(),
-///     IndependenceMutation::new(sampler),
-///     0.5,
-/// )
-/// .unwrap();
-/// assert_eq!(blend.num_components(), 1);
-/// ```
-#[derive(Clone, Copy, Debug)]
-pub struct Blend<A, B> {
-    first: A,
-    second: B,
-    second_probability: f64,
+/// The selection of section 8.1 with the global move split between two global mutations
+/// (components 1 and 2): the perturbation (component 0) with probability
+/// `perturb_probability` where it applies, else 0; of the rest, `second_share` goes to
+/// component 2 and the remainder to component 1. Every component keeps its own Hastings term
+/// (mcmc-core's component-labelled [`Mixture`]), which matters when the global mutations'
+/// densities live on different measures: a bidirectional mutation that keeps vertices of `x`
+/// is singular with respect to an independence sampler's density, so the two cannot be summed
+/// into one transition density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PerturbOrGlobalPair {
+    /// The perturbation and its probability where it applies.
+    pub perturb: PerturbOrGlobal,
+    /// Share of the global probability given to component 2.
+    pub second_share: f64,
 }
 
-impl<A, B> Blend<A, B> {
-    /// The blend drawing from `second` with probability `second_probability`.
-    ///
-    /// # Errors
-    /// [`McmcError::InvalidParameter`] for a probability outside `[0, 1]`.
-    pub fn new(first: A, second: B, second_probability: f64) -> Result<Self, McmcError> {
-        if !(0.0..=1.0).contains(&second_probability) {
-            return Err(McmcError::InvalidParameter {
-                name: "second_probability",
-                value: second_probability,
-                allowed: "[0, 1]",
-            });
-        }
-        Ok(Self {
-            first,
-            second,
-            second_probability,
-        })
-    }
-}
-
-impl<A: Proposal<Path>, B: Proposal<Path>> Proposal<Path> for Blend<A, B> {
-    fn propose<R: Rng + ?Sized>(&self, x: &Path, y: &mut Path, rng: &mut R) -> Proposed {
-        let second = rng.random::<f64>() < self.second_probability;
-        let drawn = if second {
-            self.second.propose(x, y, rng)
-        } else {
-            self.first.propose(x, y, rng)
-        };
-        if let Proposed::Invalid { .. } = drawn {
-            return Proposed::Invalid { component: 0 };
-        }
-        let forward = self.log_q(x, y);
-        if !forward.is_finite() {
-            return Proposed::Invalid { component: 0 };
-        }
-        Proposed::hastings(self.log_q(y, x) - forward)
-    }
-
-    fn log_q(&self, from: &Path, to: &Path) -> f64 {
-        let q = self.second_probability;
-        let first = if q < 1.0 {
-            (1.0 - q).ln() + self.first.log_q(from, to)
-        } else {
-            f64::NEG_INFINITY
-        };
-        let second = if q > 0.0 {
-            q.ln() + self.second.log_q(from, to)
-        } else {
-            f64::NEG_INFINITY
-        };
-        mcmc_core::proposal::log_sum_exp(&[first, second])
+impl Selection<Path> for PerturbOrGlobalPair {
+    fn probabilities(&self, x: &Path, probs: &mut [f64]) {
+        let mut two = [0.0; 2];
+        self.perturb.probabilities(x, &mut two);
+        probs[0] = two[0];
+        probs[1] = two[1] * (1.0 - self.second_share);
+        probs[2] = two[1] * self.second_share;
     }
 }

@@ -63,7 +63,7 @@ mod vec3;
 
 pub use bidir_sampler::{BidirectionalSampler, BidirectionalSamplerParams};
 pub use bidirectional::{BidirectionalMutation, BidirectionalParams};
-pub use combine::{ra_mixture, Blend, PathMutation, PerturbOrGlobal};
+pub use combine::{ra_mixture, PathMutation, PerturbOrGlobal, PerturbOrGlobalPair};
 pub use error::PathspaceError;
 pub use independence::IndependenceMutation;
 pub use path::{direction, geometry_term, solid_angle_to_area, Path, Vertex};

@@ -12,10 +12,10 @@ use pathspace::regional::{
     RegionalSigmas, ScreenPartition, SharedRegionalAdaptation, SharedSigmas,
 };
 use pathspace::{
-    ra_mixture, BidirectionalMutation, BidirectionalParams, BidirectionalSampler,
-    BidirectionalSamplerParams, Blend, FixedScale, IndependenceMutation, IndependentSampler, Path,
-    PathContribution, PathMutation, PathTarget, PerturbOrGlobal, Perturbation, PerturbationKind,
-    ScaleSource, UnidirectionalParams, UnidirectionalSampler,
+    BidirectionalMutation, BidirectionalParams, BidirectionalSampler, BidirectionalSamplerParams,
+    FixedScale, IndependenceMutation, IndependentSampler, Path, PathContribution, PathMutation,
+    PathTarget, PerturbOrGlobal, PerturbOrGlobalPair, Perturbation, PerturbationKind, ScaleSource,
+    UnidirectionalParams, UnidirectionalSampler,
 };
 use rand::SeedableRng;
 
@@ -157,25 +157,27 @@ impl<Smp: IndependentSampler + Sync> IndependentStates<Path> for IndependentPath
     }
 }
 
-/// The global move of pathmlt: Veach and Guibas' bidirectional mutation (section 5.2) with
-/// eye-side and light-side regeneration, blended ([`pathspace::Blend`], probability
-/// [`GLOBAL_INDEPENDENCE_PROBABILITY`]) with the independence mutation drawing from
-/// [`independent_sampler`]: one move reaches every path a bidirectional path tracer reaches,
-/// and small isolated features (a light seen through two mirrors) are proposed in proportion
-/// to the sampler's density rather than only through long deletions.
-pub type GlobalMutation<'a> = Blend<
+/// The global moves of pathmlt, components 1 and 2 of its mixture: Veach and Guibas'
+/// bidirectional mutation (section 5.2) with eye-side and light-side regeneration, and the
+/// independence mutation drawing from [`independent_sampler`]. Either reaches, in one step,
+/// every path a bidirectional path tracer reaches; the independence mutation proposes small
+/// isolated features (a light seen through two mirrors) in proportion to the sampler's
+/// density rather than only through deletions of the whole path.
+pub type GlobalMutation<'a> = PathMutation<
     BidirectionalMutation<'a, PathSpaceScene<'a>>,
     IndependenceMutation<BidirectionalSampler<'a, PathSpaceScene<'a>>>,
 >;
 
-/// Probability of the independence mutation within pathmlt's [`GlobalMutation`].
+/// Share of the global probability given to the independence mutation (component 2).
 pub const GLOBAL_INDEPENDENCE_PROBABILITY: f64 = 0.5;
 
-/// The mutation of pathmlt: a perturbation and the global move ([`GlobalMutation`]), 0.5 each,
-/// the global move where the perturbation cannot apply (RA paper, section 8.1).
+/// The mutation of pathmlt: a perturbation (component 0) with probability 0.5 where it
+/// applies, the rest split between the bidirectional mutation (component 1) and the
+/// independence mutation (component 2), each with its own Hastings term (RA paper, section
+/// 8.1, with the global move split).
 pub type PathMltMutation<'a> = Mixture<
     PathMutation<Perturbation<'a, PathSpaceScene<'a>, FixedScale>, GlobalMutation<'a>>,
-    PerturbOrGlobal,
+    PerturbOrGlobalPair,
 >;
 
 /// Path lengths of pathmlt for render's `max_depth` (bounces): at most `max_depth + 1` edges,
@@ -252,23 +254,22 @@ pub type AdaptiveMutation<'a> = Mixture<
         Perturbation<'a, PathSpaceScene<'a>, SharedSigmas<AdaptPartition<'a>>>,
         GlobalMutation<'a>,
     >,
-    PerturbOrGlobal,
+    PerturbOrGlobalPair,
 >;
 
 /// The mutation of pathmlt with the perturbation's scales from `Sc`.
 type ScaledMutation<'a, Sc> = Mixture<
     PathMutation<Perturbation<'a, PathSpaceScene<'a>, Sc>, GlobalMutation<'a>>,
-    PerturbOrGlobal,
+    PerturbOrGlobalPair,
 >;
 
-/// pathmlt's global move ([`GlobalMutation`]) for paths of at most `max_depth + 1` edges.
-///
-/// # Errors
-/// As [`max_segments`].
-pub fn global_mutation<'a>(
+/// The mutation of pathmlt with `kind` of perturbation whose scales come from `scale`.
+fn mutation_with_scale<'a, Sc: ScaleSource>(
     scene: &'a PathSpaceScene<'a>,
+    kind: PerturbationKind,
+    scale: Sc,
     max_depth: u32,
-) -> Result<GlobalMutation<'a>, RenderError> {
+) -> Result<ScaledMutation<'a, Sc>, RenderError> {
     let bidirectional = BidirectionalMutation::new(
         scene,
         BidirectionalParams {
@@ -278,21 +279,19 @@ pub fn global_mutation<'a>(
     )
     .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))?;
     let independence = IndependenceMutation::new(independent_sampler(scene, max_depth)?);
-    Blend::new(bidirectional, independence, GLOBAL_INDEPENDENCE_PROBABILITY)
-        .map_err(|e| RenderError::setting("global mutation", e, "a probability in [0, 1]"))
-}
-
-/// The mutation of pathmlt with `kind` of perturbation whose scales come from `scale`.
-fn mutation_with_scale<'a, Sc: ScaleSource>(
-    scene: &'a PathSpaceScene<'a>,
-    kind: PerturbationKind,
-    scale: Sc,
-    max_depth: u32,
-) -> Result<ScaledMutation<'a, Sc>, RenderError> {
-    let global = global_mutation(scene, max_depth)?;
-    let perturbation = Perturbation::new(scene, kind, scale);
-    ra_mixture(kind, perturbation, global)
-        .map_err(|e| RenderError::setting("perturbation", e, "lens|multichain"))
+    let selection = PerturbOrGlobalPair {
+        perturb: PerturbOrGlobal::otsu2018(kind),
+        second_share: GLOBAL_INDEPENDENCE_PROBABILITY,
+    };
+    Mixture::new(
+        vec![
+            PathMutation::Perturb(Perturbation::new(scene, kind, scale)),
+            PathMutation::Global(PathMutation::Perturb(bidirectional)),
+            PathMutation::Global(PathMutation::Global(independence)),
+        ],
+        selection,
+    )
+    .map_err(|e| RenderError::setting("perturbation", e, "lens|multichain"))
 }
 
 /// Renders `scene` (its camera at `settings.width x settings.height`) with path-space MLT:
