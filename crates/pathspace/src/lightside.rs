@@ -217,7 +217,7 @@ pub(crate) fn log_specular_conversion<S: PathScene + ?Sized>(
     };
     let p = &v[j].point;
     let j_light = solid_angle_to_area(p.position, &v[j + 1].point);
-    if !(j_light > 0.0) {
+    if j_light.is_nan() || j_light <= 0.0 {
         return f64::NEG_INFINITY;
     }
     let j_eye = solid_angle_to_area(p.position, &v[j - 1].point);
