@@ -54,9 +54,21 @@ fn drmlt_langevin(m: &MethodSettings) -> bool {
     matches!(m, M::Drmlt(s) if s.variant == DrVariant::CheapThenExpensive)
 }
 
-/// PSSMLT with its direct-lighting pass on.
-fn pssmlt_direct_pass(m: &MethodSettings) -> bool {
-    matches!(m, M::Pssmlt(s) if !matches!(s.direct, DirectPass::Off | DirectPass::Fixed(0)))
+/// The chain methods with a direct-lighting pass setting (PSSMLT over BDPT or the path
+/// tracer, MMLT, Langevin MLT).
+fn has_direct_pass(m: &MethodSettings) -> bool {
+    matches!(m, M::Pssmlt(_) | M::Mmlt(_) | M::Mala(_))
+}
+
+/// A chain method with its direct-lighting pass on.
+fn direct_pass_on(m: &MethodSettings) -> bool {
+    let pass = match m {
+        M::Pssmlt(s) => s.direct,
+        M::Mmlt(s) => s.direct.pass,
+        M::Mala(s) => s.direct.pass,
+        _ => return false,
+    };
+    !matches!(pass, DirectPass::Off | DirectPass::Fixed(0))
 }
 
 /// Every method flag and when it has an effect (what `MethodFlags::apply` sets and the
@@ -94,17 +106,17 @@ pub(crate) const RULES: &[FlagRule] = &[
     },
     FlagRule {
         id: "direct_samples",
-        applies: |m| m.kind() == K::Pssmlt,
+        applies: has_direct_pass,
         also: "",
     },
     FlagRule {
         id: "direct_share",
-        applies: |m| m.kind() == K::Pssmlt,
+        applies: has_direct_pass,
         also: "",
     },
     FlagRule {
         id: "direct_depth",
-        applies: pssmlt_direct_pass,
+        applies: direct_pass_on,
         also: "not with --direct-samples 0 (no direct pass)",
     },
     FlagRule {
@@ -138,8 +150,8 @@ pub(crate) const RULES: &[FlagRule] = &[
     },
     FlagRule {
         id: "sampler",
-        applies: |m| matches!(m, M::Pt(_) | M::Bdpt(_)) || pssmlt_direct_pass(m),
-        also: "pssmlt only with its direct pass (not with --direct-samples 0)",
+        applies: |m| matches!(m, M::Pt(_) | M::Bdpt(_)) || direct_pass_on(m),
+        also: "pssmlt, mmlt and mala* only with their direct pass (not with --direct-samples 0)",
     },
     FlagRule {
         id: "strategy_images",
@@ -251,6 +263,7 @@ mod tests {
 
     const MCMC_PSS: &[&str] = &[
         "pssmlt",
+        "pssmlt-pt",
         "mmlt",
         "drmlt",
         "mala",
@@ -266,14 +279,24 @@ mod tests {
         let with = |base: &[&'static str], more: &[&'static str]| [base, more].concat();
         match id {
             "large_step" => MCMC_PSS.to_vec(),
-            "large_step_mis" | "raster_mutation" => vec!["pssmlt", "mmlt"],
+            "large_step_mis" | "raster_mutation" => vec!["pssmlt", "pssmlt-pt", "mmlt"],
             "chain_allocation" | "strategy_strata" | "bdpt_normalization" => vec!["mmlt"],
-            "direct_samples" | "direct_share" | "direct_depth" => vec!["pssmlt"],
+            // mmlt's pass is off by default: giving it samples or a share turns it on.
+            "direct_samples" | "direct_share" => with(MALA, &["pssmlt", "pssmlt-pt", "mmlt"]),
+            "direct_depth" => with(MALA, &["pssmlt", "pssmlt-pt"]),
             // drmlt's default rule (orbital) has its own second-stage kernel.
-            "small_step" => with(MALA, &["pssmlt", "mmlt"]),
+            "small_step" => with(MALA, &["pssmlt", "pssmlt-pt", "mmlt"]),
             "chains" | "bootstrap_samples" => with(MCMC_PSS, &["pathmlt"]),
-            "roulette" => vec!["pt", "bdpt", "pssmlt", "drmlt", "qmc", "qmc-faure"],
-            "sampler" => vec!["pt", "bdpt", "pssmlt"],
+            "roulette" => vec![
+                "pt",
+                "bdpt",
+                "pssmlt",
+                "pssmlt-pt",
+                "drmlt",
+                "qmc",
+                "qmc-faure",
+            ],
+            "sampler" => with(MALA, &["pt", "bdpt", "pssmlt", "pssmlt-pt"]),
             "strategy_images" => vec!["bdpt"],
             "dr_variant" | "dr_on" => vec!["drmlt"],
             "perturbation" | "adapt" => vec!["pathmlt"],

@@ -6,6 +6,7 @@
 
 use clap::Args;
 use pss::{RasterParams, SmallMutation};
+use render::methods::direct_pass::DirectSettings;
 use render::methods::{ChainSettings, MethodSettings, AUTO_LARGE_STEP_ESTIMATION};
 use render::mlt::direct::DirectPass;
 use render::mlt::dr::{DrBase, DrVariant};
@@ -49,24 +50,24 @@ pub(crate) struct MethodFlags {
     #[arg(long, value_name = "N", default_value_t = 0,
           value_parser = clap::value_parser!(u64).range(0..=100_000_000))]
     pub(crate) bdpt_normalization: u64,
-    /// pssmlt: a separate direct-lighting pass (Mitsuba 0.6's `directSamples`): BDPT renders
-    /// path depths 0..=K (--direct-depth) at N samples per pixel first (under --time at most a
-    /// quarter of the time), the chains only deeper paths; 0..=65536, 0 = off [default for
-    /// pssmlt: --direct-share auto].
+    /// pssmlt, mmlt, mala*: a separate direct-lighting pass (Mitsuba 0.6's `directSamples`):
+    /// BDPT renders path depths 0..=K (--direct-depth) at N samples per pixel first (under
+    /// --time at most a quarter of the time), the chains only deeper paths; 0..=65536, 0 = off
+    /// [default: --direct-share auto for pssmlt and mala*, off for mmlt].
     #[arg(long, value_name = "N", conflicts_with = "direct_share",
           value_parser = clap::value_parser!(u32).range(0..=65_536))]
     pub(crate) direct_samples: Option<u32>,
-    /// pssmlt: the direct pass's share of the budget: `auto` picks it per scene from a pilot
+    /// pssmlt, mmlt, mala*: the direct pass's share of the budget: `auto` picks it per scene from a pilot
     /// of 16384 BDPT samples (how much of the light the pass's depths carry; about 25 % of the
     /// time on cornell-glass, 10 % on ajar-door), or a share in 0.01..=0.9 of --time (under
     /// --spp the samples per mutation that cost as much) [default: auto].
     #[arg(long, value_name = "auto|S", value_parser = parse::direct_share)]
     pub(crate) direct_share: Option<render::mlt::direct::DirectPass>,
-    /// pssmlt: the direct pass's depth K, 1..=64: BDPT renders paths of up to K bounces, the
-    /// chains the deeper ones (1: direct light only; no pass if K >= --max-depth).
-    #[arg(long, value_name = "K", default_value_t = render::mlt::direct::DIRECT_DEPTH_DEFAULT,
-          value_parser = clap::value_parser!(u32).range(1..=64))]
-    pub(crate) direct_depth: u32,
+    /// pssmlt, mmlt, mala*: the direct pass's depth K, 1..=64: BDPT renders paths of up to K
+    /// bounces, the chains the deeper ones (1: direct light only; no pass if K >=
+    /// --max-depth) [default: 2 for pssmlt, 1 for mmlt and mala*].
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub(crate) direct_depth: Option<u32>,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
     /// al. 2002), `kelemen=S1,S2` (0 < S1 < S2 <= 0.5) or `gaussian=SIGMA` with SIGMA in
     /// (0, 10] (pbrt-v3 uses gaussian=0.01).
@@ -172,6 +173,19 @@ impl MethodFlags {
         Ok(method)
     }
 
+    /// `direct` with the direct-pass flags that were given.
+    fn direct(&self, direct: DirectSettings) -> DirectSettings {
+        DirectSettings {
+            pass: self
+                .direct_samples
+                .map(DirectPass::Fixed)
+                .or(self.direct_share)
+                .unwrap_or(direct.pass),
+            depth: self.direct_depth.unwrap_or(direct.depth),
+            sampler: self.sampler.unwrap_or(direct.sampler),
+        }
+    }
+
     /// `method` with every flag that applies to it set.
     pub(crate) fn apply(&self, mut method: MethodSettings) -> MethodSettings {
         match &mut method {
@@ -189,13 +203,12 @@ impl MethodFlags {
                 s.chain = self.chain();
                 s.large_step_mis = self.large_step_mis.unwrap_or(s.large_step_mis);
                 s.raster = self.raster(s.raster);
-                s.direct = self
-                    .direct_samples
-                    .map(DirectPass::Fixed)
-                    .or(self.direct_share)
-                    .unwrap_or(s.direct);
-                s.direct_depth = self.direct_depth;
-                s.sampler = self.sampler.unwrap_or(s.sampler);
+                let d = self.direct(DirectSettings {
+                    pass: s.direct,
+                    depth: s.direct_depth,
+                    sampler: s.sampler,
+                });
+                (s.direct, s.direct_depth, s.sampler) = (d.pass, d.depth, d.sampler);
                 s.roulette = self.roulette.unwrap_or(s.roulette);
             }
             MethodSettings::Mmlt(s) => {
@@ -206,6 +219,7 @@ impl MethodFlags {
                 s.strategy_strata = self.strategy_strata;
                 s.bdpt_normalization = self.bdpt_normalization;
                 s.roulette = self.roulette.unwrap_or(s.roulette);
+                s.direct = self.direct(s.direct);
             }
             MethodSettings::Drmlt(s) => {
                 s.chain = self.chain();
@@ -221,6 +235,7 @@ impl MethodFlags {
                 s.config.params = self.mala_preset;
                 s.config.max_depth = self.mala_max_depth;
                 s.config.gradient = self.mala_gradient;
+                s.direct = self.direct(s.direct);
             }
             MethodSettings::PathMlt(s) => {
                 s.chains = self.chains as usize;

@@ -17,8 +17,8 @@
 
 use mcmc_core::delayed_rejection::{Euclidean, Torus};
 use mcmc_core::langevin::{
-    Adaptation, AnyAdaptation, CacheDriven, CheapThenExpensive, FullOnline, Hybrid, Langevin,
-    LangevinParams, LangevinSpace, Online, Plain, ProposalGaussian,
+    AdamStart, Adaptation, AnyAdaptation, CacheDriven, CheapThenExpensive, FullOnline, Hybrid,
+    Langevin, LangevinParams, LangevinSpace, Online, Plain, ProposalGaussian,
 };
 use mcmc_core::proposal::IndependentUniform;
 use mcmc_core::testing::{
@@ -640,15 +640,28 @@ fn cache_stops_growing_at_h_and_truncation_applies() {
 /// z = (mean - exact) / standard error). The chains are independent, so z is approximately
 /// standard normal when the chain is unbiased.
 fn ridge_second_moment(diminishing: bool) -> (f64, f64, f64) {
+    ridge_second_moment_with(diminishing, AdamStart::Zero, 0.0)
+}
+
+/// [`ridge_second_moment`] with the accumulators' start `start` and large steps (uniform on
+/// the ridge's box) of probability `p_large`, which restart them under
+/// [`AdamStart::FirstVisit`].
+fn ridge_second_moment_with(diminishing: bool, start: AdamStart, p_large: f64) -> (f64, f64, f64) {
     const CHAINS: u64 = 800;
     const STEPS_LONG: u64 = 20_000;
     let t = Ridge::thin();
     // x0 = cos(30) u - sin(30) v with sd(u) = 1, sd(v) = 0.05.
     let exact = 0.75 * 1.0 + 0.25 * 0.05 * 0.05;
-    let p = LangevinParams::luan2020();
+    let p = LangevinParams {
+        adam_start: start,
+        ..LangevinParams::luan2020()
+    };
     let estimates: Vec<f64> = (0..CHAINS)
         .map(|c| {
-            let kernel = Langevin::new(p, Online::new(diminishing), Euclidean).unwrap();
+            let kernel = Langevin::new(p, Online::new(diminishing), Euclidean)
+                .unwrap()
+                .with_large_step(uniform_box(&t), p_large)
+                .unwrap();
             let mut rng = rand_pcg::Pcg64::seed_from_u64(0xB1A5 + c);
             let start = t.sample_exact(&mut rng);
             let mut chain = Chain::new(&t, kernel, NoAdaptation, rng, start).unwrap();
@@ -690,6 +703,67 @@ fn online_with_diminishing_adaptation_is_not_biased() {
         z.abs() < Z_BOUND,
         "z = {z:.2} beyond {Z_BOUND} standard errors"
     );
+}
+
+/// The authors' start (accumulators at the first gradient, restarted at every accepted large
+/// step) keeps diminishing adaptation exact: restarts happen after decisions and leave the
+/// diminishing weights alone. Its negative control is the same start without diminishing
+/// adaptation, which stays biased.
+#[test]
+fn online_with_first_visit_starts_and_restarts_is_not_biased() {
+    let (mean, se, z) = ridge_second_moment_with(true, AdamStart::FirstVisit, 0.1);
+    eprintln!(
+        "online MALA, first-visit starts, large steps 0.1: E[x0^2] = {mean:.4} +- {se:.4} (exact 0.7506), z = {z:.1}"
+    );
+    assert!(
+        z.abs() < Z_BOUND,
+        "z = {z:.2} beyond {Z_BOUND} standard errors"
+    );
+    let (mean, se, z) = ridge_second_moment_with(false, AdamStart::FirstVisit, 0.1);
+    eprintln!("negative control, the same without DA: E[x0^2] = {mean:.4} +- {se:.4}, z = {z:.1}");
+    assert!(
+        z.abs() > Z_BOUND,
+        "expected a bias beyond {Z_BOUND} standard errors, z = {z:.2}"
+    );
+}
+
+/// Under [`AdamStart::FirstVisit`] the first Gaussian uses the point's own gradient
+/// (`G' = g^2`, not `0.001 g^2`), and an accepted large step makes the next one fresh again.
+#[test]
+fn first_visit_start_is_not_inflated_and_restarts() {
+    let g = [2.0, -0.5];
+    let u = [0.1, 0.2];
+    let first = |start: AdamStart| {
+        let p = LangevinParams {
+            adam_start: start,
+            ..LangevinParams::luan2020()
+        };
+        let mut a = Online::new(true);
+        let mut q = ProposalGaussian::default();
+        assert!(a.gaussian(&p, &u, &g, &mut q));
+        (p, a, q)
+    };
+    let (_, _, zero) = first(AdamStart::Zero);
+    let (p, mut a, fv) = first(AdamStart::FirstVisit);
+    // At t = 0 the diminishing weight is 1: M = 1 / (delta + sqrt(G')).
+    let m = |g2: f64| 1.0 / (p.delta + g2.sqrt());
+    for (i, gi) in g.iter().enumerate() {
+        let expect_fv = p.epsilon * m(gi * gi);
+        let expect_zero = p.epsilon * m((1.0 - p.beta) * gi * gi);
+        assert!((fv.std()[i].powi(2) - expect_fv).abs() < 1e-10 * expect_fv);
+        assert!((zero.std()[i].powi(2) - expect_zero).abs() < 1e-10 * expect_zero);
+    }
+    // After an adapt step the Gaussian blends; after a restart it is fresh again.
+    a.adapt(&p, &u, &g, true);
+    let mut blended = ProposalGaussian::default();
+    a.gaussian(&p, &u, &[0.5, 0.5], &mut blended);
+    a.restart(&p);
+    let mut fresh = ProposalGaussian::default();
+    a.gaussian(&p, &u, &[0.5, 0.5], &mut fresh);
+    assert!(fresh.std()[0].powi(2) != blended.std()[0].powi(2));
+    let w1 = 2f64.powf(-p.c1);
+    let expect = p.epsilon / ((1.0 - w1) + w1 * (p.delta + 0.5));
+    assert!((fresh.std()[0].powi(2) - expect).abs() < 1e-10 * expect);
 }
 
 // ---- expected-value splatting ----

@@ -6,7 +6,9 @@
 //! K = 2 with the Owen-scrambled Sobol points (PSSMLT's default sampler for the pass), and for
 //! the whole default through `session::render`: the balanced pass, whose share of the budget
 //! a pilot picks from its own samples (the pass and the chains stay unbiased for any share
-//! that does not depend on their own numbers).
+//! that does not depend on their own numbers). The same pass before MMLT-based chains
+//! (`mmlt` with the pass on, `mala` by default) and before PSSMLT over the path tracer
+//! converges too, and MMLT chains restricted to the deeper depths without it fail.
 //!
 //! Statistics as in `mlt_convergence.rs` (its module comment): `R` independent replicates per
 //! estimate against `K` independent BDPT references, Welch t on the image mean and on
@@ -24,9 +26,12 @@ use mcmc_core::Mh;
 use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::BdptParams;
 use render::image::Image;
+use render::methods::direct_pass::DirectSettings;
+use render::methods::{MethodSettings, MmltSettings};
 use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_DEPTH_DEFAULT};
 use render::mlt::{
-    LargeStepMode, MltBudget, MltDriver, MltEstimator, MltSettings, PssmltTarget, PATH_STREAMS,
+    LargeStepMode, MltBudget, MltDriver, MltEstimator, MltSettings, MmltTarget, PssmltTarget,
+    PATH_STREAMS,
 };
 use render::sampler::SamplerKind;
 use render::scene::Scene;
@@ -36,9 +41,11 @@ const ALPHA_FAMILY: f64 = 0.001;
 const R: usize = 16;
 const K: usize = 16;
 const BLOCKS: usize = 4;
-/// The positive cases, one per sampler and the session default: image mean and blocks. (The negative controls are
-/// expected to exceed the same critical value; they are not null-hypothesis comparisons.)
-const N_COMPARISONS: usize = 3 * (1 + BLOCKS * BLOCKS);
+/// The positive cases, one per sampler and the session default, and the session defaults of
+/// the chain methods that share the pass (MMLT with its pass on, `mala`, `pssmlt-pt`): image
+/// mean and blocks. (The negative controls are expected to exceed the same critical value;
+/// they are not null-hypothesis comparisons.)
+const N_COMPARISONS: usize = 6 * (1 + BLOCKS * BLOCKS);
 const SIZE: u32 = 16;
 const DEPTH: u32 = 5;
 const PASS: DirectPass = DirectPass::Fixed(16);
@@ -219,4 +226,96 @@ fn the_default_balanced_pass_converges_to_bdpt() {
         BLOCKS,
         critical(),
     );
+}
+
+/// `R` replicates of `method` as the session renders it, at 64 mutations per pixel; every
+/// replicate's notes must report the direct pass.
+fn session_replicates(method: &MethodSettings, seed0: u64) -> Vec<Image> {
+    let cancel = AtomicBool::new(false);
+    (0..R as u64)
+        .map(|r| {
+            let settings = RenderSettings {
+                width: SIZE,
+                height: SIZE,
+                budget: Budget::SamplesPerPixel(64),
+                threads: 2,
+                seed: seed0 + r,
+                max_depth: DEPTH,
+                method: method.clone().with_chains(64, 20_000),
+            };
+            let out = render(cornell(), &settings, &NoProgress, &cancel).unwrap();
+            assert!(
+                out.notes
+                    .iter()
+                    .any(|n| n.contains("direct-lighting pass: depths 0-")),
+                "{:?}",
+                out.notes
+            );
+            assert!(out.mcmc.as_ref().unwrap().direct_pass.is_some());
+            assert_finite_non_negative(&out.image, "session replicate");
+            out.image
+        })
+        .collect()
+}
+
+/// The pass shared by the MMLT-based integrators: MMLT with the balanced pass of depth 1,
+/// Langevin MLT's default (the same pass) and PSSMLT over the path tracer (its default pass of
+/// depth 2) converge to BDPT.
+#[test]
+fn the_pass_before_mmlt_mala_and_pssmlt_pt_converges_to_bdpt() {
+    let mmlt = MethodSettings::from(MmltSettings {
+        direct: DirectSettings::balanced(1),
+        ..MmltSettings::default()
+    });
+    let cases = [
+        ("mmlt", mmlt, 46_000),
+        ("mala", IntegratorKind::Mala.settings(), 47_000),
+        ("pssmlt-pt", IntegratorKind::PssmltPt.settings(), 48_000),
+    ];
+    for (name, method, seed0) in cases {
+        let images = session_replicates(&method, seed0);
+        against_reference(
+            &format!("cornell {name} with the direct pass"),
+            &images,
+            reference(),
+            BLOCKS,
+            critical(),
+        );
+    }
+}
+
+/// Negative control for the MMLT split: chains over depths 2..=5 only
+/// ([`MmltTarget::depths_from`]) without the pass miss the direct light.
+#[test]
+fn mmlt_chains_without_the_pass_miss_the_direct_light() {
+    let cancel = AtomicBool::new(false);
+    let targets = MmltTarget::depths_from(cornell(), params(), SIZE, SIZE, 2);
+    assert_eq!(targets.first().map(MmltTarget::depth), Some(2));
+    let images: Vec<Image> = (0..R as u64)
+        .map(|r| {
+            let settings = MltSettings {
+                width: SIZE as usize,
+                height: SIZE as usize,
+                chains: 64,
+                bootstrap_samples: 20_000,
+                budget: MltBudget::MutationsPerPixel(64.0),
+                large_step: LargeStepMode::Fixed(0.3),
+                seed: 49_000 + r,
+                streams: PATH_STREAMS,
+                stage_map: false,
+                shard: render::shard::Shard::WHOLE,
+            };
+            let kernel = |p: f64| {
+                let small =
+                    SmallStep::new(SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap());
+                Mh::new(PssmltProposal::new(small, p).unwrap())
+            };
+            MltDriver::new(&targets, &settings)
+                .first_depth(2)
+                .run(kernel, &NoProgress, &cancel)
+                .image
+        })
+        .collect();
+    let t = mean_t(&images);
+    assert!(t < -critical(), "missing direct light not detected: t {t}");
 }

@@ -6,7 +6,7 @@ use super::cache_view::CacheView;
 #[cfg(feature = "nalgebra")]
 use super::full_online::FullOnline;
 use super::gaussian::ProposalGaussian;
-use super::params::LangevinParams;
+use super::params::{AdamStart, LangevinParams};
 
 /// The adaptation of MALA with adaptation (Luan et al. 2020, Alg. 1-4): a parameter `theta` (the accumulated
 /// gradient statistics, or the gradient cache) and the rule that forms the proposal
@@ -48,6 +48,13 @@ pub trait Adaptation: Clone + Send + std::fmt::Debug {
     fn freeze(&mut self);
     /// True once `theta` no longer changes.
     fn is_frozen(&self) -> bool;
+    /// A large step was accepted: the chain is somewhere new. Adaptations whose statistics
+    /// are local restart them ([`Online`] with [`AdamStart::FirstVisit`]); none by default.
+    /// Like [`Adaptation::adapt`] it runs after a decision, so each step's kernel is still
+    /// `pi`-invariant. No-op once frozen.
+    fn restart(&mut self, params: &LangevinParams) {
+        let _ = params;
+    }
     /// Calls `f` on every gradient cache the adaptation holds (shared by the render loop
     /// through [`super::CacheSharing`]); none by default.
     fn for_each_cache(&mut self, f: &mut dyn FnMut(&mut CacheView)) {
@@ -136,10 +143,21 @@ impl Adaptation for Plain {
 /// `m -> g` (plain MALA) as `t -> inf`. No bias correction (the paper's footnote 2). With the
 /// switches [`Online::without_momentum`] / [`Online::without_preconditioning`] it gives the
 /// ablations of Fig. 2.
+///
+/// # Start ([`LangevinParams::adam_start`])
+/// With [`AdamStart::FirstVisit`] (the authors' code) the accumulators are *fresh* at the
+/// start and after every accepted large step ([`Adaptation::restart`]): while fresh,
+/// the Gaussian at `u` uses `G' = g (.) g`, `d' = g` (the Adam update with `G`, `d` equal to
+/// the point's own gradient, an implicit bias correction), and the first [`Adaptation::adapt`]
+/// sets `G = g (.) g`, `d = g`. The step counter `t` (the diminishing weights) is not reset,
+/// so diminishing adaptation still holds. Freshness is part of `theta`: forward and reverse
+/// densities of a step see the same value.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Online {
     g2: Vec<f64>,
     d: Vec<f64>,
+    /// No gradient folded in since the start or the last restart.
+    fresh: bool,
     t: u64,
     diminishing: bool,
     momentum: bool,
@@ -155,6 +173,7 @@ impl Online {
         Self {
             g2: Vec::new(),
             d: Vec::new(),
+            fresh: true,
             t: 0,
             diminishing,
             momentum: true,
@@ -221,16 +240,25 @@ impl Adaptation for Online {
         let n = g.len();
         self.ensure_dim(n);
         let (w1, w2) = diminishing_weights(params, self.t, self.diminishing);
+        let first = self.fresh && params.adam_start == AdamStart::FirstVisit;
         with_buffers(n, |m_diag, drift| {
             for i in 0..n {
                 m_diag[i] = if self.precondition {
-                    let g2 = params.beta * self.g2[i] + (1.0 - params.beta) * g[i] * g[i];
+                    let g2 = if first {
+                        g[i] * g[i]
+                    } else {
+                        params.beta * self.g2[i] + (1.0 - params.beta) * g[i] * g[i]
+                    };
                     1.0 / ((1.0 - w1) + w1 * (params.delta + g2.sqrt()))
                 } else {
                     1.0
                 };
                 drift[i] = if self.momentum {
-                    let d = params.alpha * self.d[i] + (1.0 - params.alpha) * g[i];
+                    let d = if first {
+                        g[i]
+                    } else {
+                        params.alpha * self.d[i] + (1.0 - params.alpha) * g[i]
+                    };
                     g[i] + w2 * d
                 } else {
                     g[i]
@@ -245,11 +273,22 @@ impl Adaptation for Online {
             return;
         }
         self.ensure_dim(g.len());
+        let first = self.fresh && params.adam_start == AdamStart::FirstVisit;
         for ((g2, d), &gi) in self.g2.iter_mut().zip(&mut self.d).zip(g) {
-            *g2 = params.beta * *g2 + (1.0 - params.beta) * gi * gi;
-            *d = params.alpha * *d + (1.0 - params.alpha) * gi;
+            if first {
+                (*g2, *d) = (gi * gi, gi);
+            } else {
+                *g2 = params.beta * *g2 + (1.0 - params.beta) * gi * gi;
+                *d = params.alpha * *d + (1.0 - params.alpha) * gi;
+            }
         }
+        self.fresh = false;
         self.t += 1;
+    }
+    fn restart(&mut self, params: &LangevinParams) {
+        if !self.frozen && params.adam_start == AdamStart::FirstVisit {
+            self.fresh = true;
+        }
     }
     fn freeze(&mut self) {
         self.frozen = true;
@@ -434,6 +473,11 @@ impl Adaptation for Hybrid {
             self.cache.adapt(params, u, g, first_visit);
         }
     }
+    fn restart(&mut self, params: &LangevinParams) {
+        if self.is_online() {
+            self.online.restart(params);
+        }
+    }
     fn freeze(&mut self) {
         self.online.freeze();
         self.cache.freeze();
@@ -514,6 +558,11 @@ impl<A: Adaptation> Adaptation for PerDimension<A> {
             self.entry(u.len()).adapt(params, u, g, first_visit);
         }
     }
+    fn restart(&mut self, params: &LangevinParams) {
+        for (_, a) in &mut self.entries {
+            a.restart(params);
+        }
+    }
     fn freeze(&mut self) {
         self.frozen = true;
         for (_, a) in &mut self.entries {
@@ -578,6 +627,9 @@ impl Adaptation for AnyAdaptation {
     }
     fn adapt(&mut self, params: &LangevinParams, u: &[f64], g: &[f64], first_visit: bool) {
         each_adaptation!(self, a => a.adapt(params, u, g, first_visit))
+    }
+    fn restart(&mut self, params: &LangevinParams) {
+        each_adaptation!(self, a => a.restart(params))
     }
     fn freeze(&mut self) {
         each_adaptation!(self, a => a.freeze())

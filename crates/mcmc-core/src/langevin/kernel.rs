@@ -380,6 +380,9 @@ where
             );
             if info.accepted() {
                 self.current.invalidate();
+                if component == LARGE_STEP_COMPONENT {
+                    self.adaptation.restart(&self.params);
+                }
             }
             return info;
         }

@@ -2,6 +2,21 @@
 
 use crate::McmcError;
 
+/// How the Adam-like accumulators of online adaptation (`G`, `d`; Luan et al. 2020, Alg. 2)
+/// start.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum AdamStart {
+    /// At zero, without bias correction (the paper's text, footnote 2). With `beta = 0.999`,
+    /// `G` is about `0.001 t g^2` after `t` steps, which inflates `M` by about `31 / sqrt(t)`
+    /// early on.
+    #[default]
+    Zero,
+    /// At the first gradient (`G = g (.) g`, `d = g`) at the first step after a restart, and
+    /// restarted whenever a large step is accepted (the authors' code: an implicit bias
+    /// correction, statistics local to the region the chain explores).
+    FirstVisit,
+}
+
 /// Parameters of the Metropolis-adjusted Langevin algorithm with adaptation (Luan et al.
 /// 2020, Alg. 1-4). Plain data with
 /// documented defaults ([`LangevinParams::luan2020`]); [`LangevinParams::validate`] checks
@@ -59,6 +74,9 @@ pub struct LangevinParams {
     /// Standard deviation of the isotropic shrink prior whose precision is added to the
     /// proposal's (`INFINITY`: none). Paper: none; the authors' code: 0.005.
     pub max_std: f64,
+    /// How online adaptation's accumulators start ([`AdamStart`]). Paper:
+    /// [`AdamStart::Zero`]; the authors' code: [`AdamStart::FirstVisit`].
+    pub adam_start: AdamStart,
 }
 
 impl LangevinParams {
@@ -80,6 +98,7 @@ impl LangevinParams {
             cache_size: 10_000,
             preconditioner_range: [0.0, f64::INFINITY],
             max_std: f64::INFINITY,
+            adam_start: AdamStart::Zero,
         }
     }
 
@@ -95,6 +114,7 @@ impl LangevinParams {
             cache_size: 3000,
             preconditioner_range: [0.01, 100.0],
             max_std: 0.005,
+            adam_start: AdamStart::FirstVisit,
             ..Self::luan2020()
         }
     }

@@ -48,6 +48,23 @@ pub fn li_with<S: Sampler + ?Sized>(
     max_depth: u32,
     roulette: Option<u32>,
 ) -> Vec3 {
+    li_depths(scene, ray, sampler, 0, max_depth, roulette)
+}
+
+/// [`li_with`] counting only paths of `min_depth..=max_depth` bounces (emitters seen directly
+/// have depth 0, direct lighting depth 1): the random walk and the numbers it reads are those
+/// of [`li_with`], shorter paths' contributions are left out (for a separate pass that renders
+/// them). An emitter hit and the next-event estimate it is weighted against have the same
+/// depth, so every depth keeps its MIS pair whole.
+#[inline]
+pub fn li_depths<S: Sampler + ?Sized>(
+    scene: &Scene,
+    ray: Ray,
+    sampler: &mut S,
+    min_depth: u32,
+    max_depth: u32,
+    roulette: Option<u32>,
+) -> Vec3 {
     let lights = scene.lights();
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
@@ -63,7 +80,7 @@ pub fn li_with<S: Sampler + ?Sized>(
             // The ray leaves the scene: the environment, MIS-weighted against its sampling
             // by next-event estimation.
             let le = lights.environment_le(ray.dir);
-            if le != Vec3::ZERO {
+            if le != Vec3::ZERO && depth >= min_depth {
                 if depth == 0 || specular_bounce {
                     l += beta * le;
                 } else {
@@ -74,7 +91,7 @@ pub fn li_with<S: Sampler + ?Sized>(
             break;
         };
         let le = scene.emitted(&si, si.wo);
-        if le != Vec3::ZERO {
+        if le != Vec3::ZERO && depth >= min_depth {
             if depth == 0 || specular_bounce {
                 l += beta * le;
             } else if let Some(light) = lights.light_of_triangle(si.triangle) {
@@ -98,7 +115,7 @@ pub fn li_with<S: Sampler + ?Sized>(
         if wo.z == 0.0 {
             break;
         }
-        if !bsdf.is_specular() {
+        if !bsdf.is_specular() && depth >= min_depth {
             if let Some(ls) = scene.sample_li(si.p, u_light, u_light_pos) {
                 if ls.radiance != Vec3::ZERO {
                     let wi = frame.to_local(ls.wi);

@@ -5,12 +5,83 @@
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
-use super::{DirectPassStats, RenderSettings, Run};
+use super::{unsampled_note, DirectPassStats, RenderOutput, RenderSettings, Run, Unsampled};
 use crate::bdpt::{BdptOutput, BdptParams};
 use crate::budget::Budget;
 use crate::mlt::direct::{self, DirectPass};
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
+
+/// A direct-lighting pass's settings, shared by the Markov chain integrators over BDPT paths
+/// (`mmlt` and the `mala*` rows; `pssmlt` keeps the same three settings as its own fields).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectSettings {
+    /// How the pass is budgeted ([`DirectPass::Off`]: no pass, the chains take every depth).
+    pub pass: DirectPass,
+    /// The pass renders depths `0..=depth` (at least 1; no pass if `depth` >= the maximum
+    /// depth).
+    pub depth: u32,
+    /// The pass's per-pixel sampler.
+    pub sampler: SamplerKind,
+}
+
+impl DirectSettings {
+    /// No pass.
+    pub const OFF: Self = Self {
+        pass: DirectPass::Off,
+        depth: direct::DIRECT_DEPTH_DEFAULT,
+        sampler: SamplerKind::Sobol,
+    };
+
+    /// PSSMLT's default pass ([`DirectPass::PSSMLT_DEFAULT`], balanced against the chains by
+    /// a pilot) over depths `0..=depth`, Sobol points.
+    #[must_use]
+    pub const fn balanced(depth: u32) -> Self {
+        Self {
+            pass: DirectPass::PSSMLT_DEFAULT,
+            depth,
+            sampler: SamplerKind::Sobol,
+        }
+    }
+
+    /// The pass's depth as used (at least 1).
+    #[must_use]
+    pub const fn pass_depth(&self) -> u32 {
+        if self.depth == 0 {
+            1
+        } else {
+            self.depth
+        }
+    }
+
+    /// Runs the pass (if on) before the chains: the pass usable by the chains, the time it
+    /// took, and the shallowest depth the chains must sample ([`run`], [`usable`],
+    /// [`chain_min_depth`]).
+    pub fn run(
+        &self,
+        scene: &Scene,
+        params: &BdptParams,
+        common: &RenderSettings,
+        run_: &Run<'_>,
+        notes: &mut Vec<String>,
+    ) -> (Option<DirectRun>, Option<Duration>, u32) {
+        let depth = self.pass_depth();
+        let ran = run(
+            scene,
+            params,
+            common,
+            self.pass,
+            depth,
+            self.sampler,
+            run_,
+            notes,
+        );
+        let spent = ran.as_ref().map(|d| d.elapsed);
+        let ran = usable(ran, common, notes);
+        let min_depth = chain_min_depth(ran.as_ref(), self.pass, common, depth);
+        (ran, spent, min_depth)
+    }
+}
 
 /// A direct-lighting pass that ran.
 #[derive(Debug)]
@@ -137,4 +208,83 @@ pub fn run(
         pass: out,
         elapsed: t0.elapsed(),
     })
+}
+
+/// The pass if the chains can rely on it: a pass whose share of a time budget did not reach
+/// every pixel (a huge image) would leave those pixels without their direct light, so it is
+/// dropped (with a note) and the chains take every depth.
+pub fn usable(
+    direct: Option<DirectRun>,
+    common: &RenderSettings,
+    notes: &mut Vec<String>,
+) -> Option<DirectRun> {
+    let d = direct?;
+    if d.pass.unsampled_pixels > 0 && !d.pass.cancelled {
+        let pixels = u64::from(common.width) * u64::from(common.height);
+        notes.push(format!(
+            "the direct-lighting pass reached only {:.1} % of the pixels in its share of the time budget: it is dropped and the chains render every depth",
+            100.0 * (pixels - d.pass.unsampled_pixels.min(pixels)) as f64 / pixels as f64
+        ));
+        return None;
+    }
+    Some(d)
+}
+
+/// The shallowest path depth the chains sample: beyond the pass's depths if a pass ran,
+/// else 0 (every depth).
+#[must_use]
+pub fn chain_min_depth(
+    direct: Option<&DirectRun>,
+    pass: DirectPass,
+    common: &RenderSettings,
+    pass_depth: u32,
+) -> u32 {
+    if direct.is_some() {
+        pass.chain_min_depth(common.max_depth, pass_depth)
+    } else {
+        0
+    }
+}
+
+/// Adds the pass to the chains' output: its image, counters, shard component, statistics
+/// and notes (what the image holds if the chains found nothing or never ran).
+pub fn merge_into(
+    d: DirectRun,
+    output: &mut RenderOutput,
+    common: &RenderSettings,
+    run: &Run<'_>,
+    chains_ran: bool,
+) {
+    let depths = format!("path depths 0-{}", d.stats.depth);
+    if output.mcmc.as_ref().is_some_and(|m| m.found_nothing) {
+        output.notes.push(format!(
+            "the bootstrap found no light on deeper paths: the direct-lighting pass ({depths}) is the whole image"
+        ));
+    } else if !chains_ran {
+        output.notes.push(format!(
+            "{} before the chains ran: the image holds only the direct-lighting pass ({depths}); the light of deeper paths is missing",
+            if output.cancelled || run.cancel.load(Ordering::Relaxed) {
+                "cancelled"
+            } else {
+                "stopped"
+            }
+        ));
+    }
+    output.notes.extend(unsampled_note(
+        d.pass.unsampled_pixels,
+        u64::from(common.width) * u64::from(common.height),
+        d.pass.cancelled,
+        Unsampled::CameraSamples,
+    ));
+    output.unsampled_pixels = d.pass.unsampled_pixels;
+    direct::add_into(&mut output.image, &d.pass.image);
+    if let (Some(partial), Some(c)) = (output.partial.as_mut(), d.pass.component) {
+        partial.components.push(c);
+    }
+    output.dropped_nonfinite += d.pass.dropped;
+    output.cancelled |= d.pass.cancelled;
+    if let Some(stats) = output.mcmc.as_mut() {
+        stats.direct_pass = Some(d.stats);
+        stats.times.direct_pass = d.elapsed;
+    }
 }

@@ -4,12 +4,14 @@
 
 use mcmc_core::langevin::LangevinParams;
 
+use super::direct_pass::{self, DirectSettings};
 use super::{
-    bdpt_params, depth_note, emitter_notes, mcmc_output, ChainSettings, IntegratorKind, Method,
-    RenderOutput, RenderSettings, Run,
+    bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, ChainSettings, IntegratorKind,
+    Method, RenderOutput, RenderSettings, Run,
 };
 use crate::bdpt::BdptParams;
 use crate::error::RenderError;
+use crate::mlt::direct::DirectPass;
 use crate::mlt::mala::{self, GradientMethod, MalaConfig, MalaVariant};
 use crate::mlt::PATH_STREAMS;
 use crate::scene::Scene;
@@ -22,6 +24,11 @@ pub struct MalaSettings {
     pub chain: ChainSettings,
     /// The variant, MALA's parameters, the depth rule and the gradient.
     pub config: MalaConfig,
+    /// The separate direct-lighting pass: BDPT renders depths `0..=direct.depth`, the
+    /// Langevin chains only the deeper paths (the authors' code renders paths of at most
+    /// two segments, our depths 0 and 1, by a separate 256-spp pass; the paper's text does
+    /// not say).
+    pub direct: DirectSettings,
 }
 
 impl Default for MalaSettings {
@@ -65,13 +72,28 @@ impl MalaSettings {
                 fd_step: 1e-4,
                 cheap_sigma: 1.0 / 64.0,
             },
+            direct: Self::AUTHORS_DIRECT,
         }
     }
 
-    /// The command line's defaults for `variant` (the `mala*` rows).
+    /// The authors' direct-lighting split: depths 0 and 1 by a separate pass of 256 samples
+    /// per pixel (dpt's `directSpp`), the chains the deeper paths.
+    pub const AUTHORS_DIRECT: DirectSettings = DirectSettings {
+        pass: DirectPass::Fixed(256),
+        depth: 1,
+        sampler: crate::sampler::SamplerKind::Sobol,
+    };
+
+    /// The command line's defaults for `variant` (the `mala*` rows): the paper's method
+    /// ([`MalaSettings::luan2020_variant`]) with its direct-lighting split budgeted as
+    /// `pssmlt`'s pass is (balanced against the chains by a pilot,
+    /// [`DirectSettings::balanced`]) instead of a fixed 256 samples per pixel, so short
+    /// renders are not all direct pass.
     #[must_use]
     pub const fn with_variant(variant: MalaVariant) -> Self {
-        Self::luan2020_variant(variant)
+        let mut s = Self::luan2020_variant(variant);
+        s.direct = DirectSettings::balanced(1);
+        s
     }
 }
 
@@ -120,21 +142,33 @@ impl Method for MalaSettings {
         let params = bdpt_params(common, BdptParams::default().roulette);
         let mut notes = emitter_notes(scene);
         notes.extend(depth_note(common));
-        let mlt_settings = self
+        let (direct, direct_spent, min_depth) =
+            self.direct.run(scene, &params, common, run, &mut notes);
+        let mut mlt_settings = self
             .chain
             .mlt_settings(common, PATH_STREAMS, false, run.shard);
+        if let Some(spent) = direct_spent {
+            mlt_settings.budget = remaining(mlt_settings.budget, spent);
+        }
         notes.push(mala_note(&self.config));
-        let out = mala::render(
+        let out = mala::render_from_depth(
             scene,
             params,
             &self.config,
             false,
             &mlt_settings,
             self.chain.small_step,
+            min_depth,
             run.progress,
             run.cancel,
         );
-        Ok(mcmc_output(out, notes, run.start.elapsed()))
+        let chains_ran = out.mutations > 0;
+        let mut output = mcmc_output(out, notes, run.start.elapsed());
+        if let Some(d) = direct {
+            direct_pass::merge_into(d, &mut output, common, run, chains_ran);
+        }
+        output.elapsed = run.start.elapsed();
+        Ok(output)
     }
 }
 

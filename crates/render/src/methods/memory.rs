@@ -9,7 +9,9 @@
 
 use mcmc_core::render_loop::EXACT_GRID_BYTES_PER_PIXEL;
 
-use super::{DrmltSettings, IntegratorKind, MalaSettings, MethodSettings, RenderSettings};
+use super::{
+    DrmltSettings, IntegratorKind, MalaSettings, MethodSettings, MmltSettings, RenderSettings,
+};
 use crate::bdpt::MAX_PATH_DEPTH;
 use crate::budget::Budget;
 /// Byte counts as people read them (`12.34 GiB`), defined with the error that prints them.
@@ -142,13 +144,31 @@ fn image_bytes(settings: &RenderSettings, depth: u32) -> u64 {
                 chains
             }
         }
-        MethodSettings::Mmlt(_) | MethodSettings::Mala(_) => mcmc(1),
+        MethodSettings::Mmlt(MmltSettings { direct, .. })
+        | MethodSettings::Mala(MalaSettings { direct, .. }) => {
+            let pass = direct
+                .pass
+                .applies_to(settings.max_depth, direct.pass_depth());
+            with_direct_pass(mcmc(1), pass, per_pixel)
+        }
         // Two layers (image and stage 2) and the stage map image.
         MethodSettings::Drmlt(_) => mcmc(2).saturating_add(per_pixel(IMAGE + OUTPUT)),
         // Plus the per-pixel scale map of regional adaptation.
         MethodSettings::PathMlt(_) => mcmc(1).saturating_add(per_pixel(8)),
         // The sums, a partial first progression, the per-tile splats of a pass, the image.
         MethodSettings::Lqmc(_) => per_pixel(2 * EXACT_GRID + LQMC_TILES + IMAGE),
+    }
+}
+
+/// A chain method's peak with a direct-lighting pass (BDPT, run first; its image stays while
+/// the chains run) if `pass`.
+fn with_direct_pass(chains: u64, pass: bool, per_pixel: impl Fn(u64) -> u64) -> u64 {
+    if pass {
+        chains
+            .saturating_add(per_pixel(IMAGE))
+            .max(per_pixel(bdpt_bytes_per_pixel()))
+    } else {
+        chains
     }
 }
 

@@ -3,6 +3,7 @@
 
 use std::time::Instant;
 
+use super::direct_pass::{self, DirectSettings};
 use super::pssmlt::push_estimator_notes;
 use super::{
     bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, ChainSettings, IntegratorKind,
@@ -39,6 +40,10 @@ pub struct MmltSettings {
     /// Russian roulette of the all-strategy samples of `bdpt_normalization` (the chains'
     /// paths have a fixed length and never use it). Default from 3 bounces on.
     pub roulette: Roulette,
+    /// A separate direct-lighting pass ([`crate::mlt::direct`], shared with `pssmlt`): BDPT
+    /// renders depths `0..=direct.depth`, the chains only the deeper ones. Default off (the
+    /// paper's MMLT has none).
+    pub direct: DirectSettings,
 }
 
 impl Default for MmltSettings {
@@ -61,6 +66,7 @@ impl MmltSettings {
             strategy_strata: false,
             bdpt_normalization: 0,
             roulette: Roulette { start: Some(3) },
+            direct: DirectSettings::OFF,
         }
     }
 }
@@ -100,9 +106,14 @@ impl Method for MmltSettings {
         let mut notes = emitter_notes(scene);
         notes.extend(depth_note(common));
         let kernel = PssKernel::new(self.chain.small_step, &self.raster, w, h);
-        let mlt_settings = self
+        let (direct, direct_spent, min_depth) =
+            self.direct.run(scene, &params, common, run, &mut notes);
+        let mut mlt_settings = self
             .chain
             .mlt_settings(common, PATH_STREAMS, false, run.shard);
+        if let Some(spent) = direct_spent {
+            mlt_settings.budget = remaining(mlt_settings.budget, spent);
+        }
         let estimator = MltEstimator {
             large_step_mis: self.large_step_mis,
             chain_allocation: self.chain_allocation,
@@ -142,7 +153,9 @@ impl Method for MmltSettings {
                     t0.elapsed().as_secs_f64(),
                     nb.b.iter().sum::<f64>()
                 ));
-                Some((nb.b, t0.elapsed()))
+                // The chains' targets are the depths beyond the direct pass.
+                let b = nb.b.get(min_depth as usize..).unwrap_or_default().to_vec();
+                Some((b, t0.elapsed()))
             })
             .flatten();
         if self.bdpt_normalization > 0 && normalization.is_none() {
@@ -151,9 +164,11 @@ impl Method for MmltSettings {
                     .to_owned(),
             );
         }
-        let targets = MmltTarget::all_depths(scene, params, w, h);
+        let targets = MmltTarget::depths_from(scene, params, w, h, min_depth);
         let make_kernel = |p: f64| kernel.with_large_step(p);
-        let driver = MltDriver::new(&targets, &mlt_settings).estimator(estimator);
+        let driver = MltDriver::new(&targets, &mlt_settings)
+            .estimator(estimator)
+            .first_depth(min_depth);
         let (out, spent) = match &normalization {
             Some((nb, spent)) => {
                 let budgeted = mlt::MltSettings {
@@ -162,6 +177,7 @@ impl Method for MmltSettings {
                 };
                 let out = MltDriver::new(&targets, &budgeted)
                     .estimator(estimator)
+                    .first_depth(min_depth)
                     .normalized(nb)
                     .run(make_kernel, run.progress, run.cancel);
                 (out, *spent)
@@ -171,10 +187,15 @@ impl Method for MmltSettings {
                 std::time::Duration::ZERO,
             ),
         };
+        let chains_ran = out.mutations > 0;
         let mut output = mcmc_output(out, notes, run.start.elapsed());
         if let Some(stats) = output.mcmc.as_mut() {
             stats.times.normalization = spent;
         }
+        if let Some(d) = direct {
+            direct_pass::merge_into(d, &mut output, common, run, chains_ran);
+        }
+        output.elapsed = run.start.elapsed();
         Ok(output)
     }
 }

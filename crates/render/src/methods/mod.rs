@@ -8,7 +8,7 @@
 //! |---|---|---|---|
 //! | [`pt`] | `pt`, `qmc`, `qmc-faure` | [`PtSettings`], [`QmcSettings`] | |
 //! | [`bdpt`] | `bdpt` | [`BdptSettings`] | |
-//! | [`pssmlt`] | `pssmlt` | [`PssmltSettings`] | `kelemen2002`, `zsolnai2013` |
+//! | [`pssmlt`] | `pssmlt`, `pssmlt-pt` | [`PssmltSettings`] ([`PathBase`]) | `kelemen2002`, `zsolnai2013` |
 //! | [`mmlt`] | `mmlt` | [`MmltSettings`] | `hachisuka2014` |
 //! | [`drmlt`] | `drmlt` | [`DrmltSettings`] | `rioux_lavoie2020` |
 //! | [`mala`] | `mala`, `mala-online`, `mala-cache`, `mala-hybrid` | [`MalaSettings`] | `luan2020`, `luan2020_code` |
@@ -55,7 +55,7 @@ pub use output::{
     RenderOutput, Unsampled,
 };
 pub use pathmlt::PathMltSettings;
-pub use pssmlt::PssmltSettings;
+pub use pssmlt::{PathBase, PssmltSettings};
 pub use pt::{PtSettings, QmcSettings};
 pub use settings::{
     mlt_budget, remaining, ChainSettings, MethodSettings, RenderSettings,

@@ -1,28 +1,41 @@
-//! `pssmlt`: primary-sample-space MLT over BDPT (Kelemen et al. 2002): every strategy of a
-//! BDPT sample weighted by MIS is one path contribution, the chains move the primary sample
+//! `pssmlt` and `pssmlt-pt`: primary-sample-space MLT (Kelemen et al. 2002) over BDPT (every
+//! strategy of a BDPT sample weighted by MIS is one path contribution) or over the
+//! unidirectional path tracer with next-event estimation; the chains move the primary sample
 //! vector with Kelemen's small steps and independent large steps.
 
 use super::direct_pass::{self, DirectRun};
-use std::sync::atomic::Ordering;
 
 use super::{
-    bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, unsampled_note, ChainSettings,
-    IntegratorKind, Method, PssKernel, RenderOutput, RenderSettings, Run, Unsampled,
+    bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, ChainSettings, IntegratorKind,
+    Method, PssKernel, RenderOutput, RenderSettings, Run,
 };
 use crate::bdpt::{BdptParams, Roulette};
 use crate::error::RenderError;
 use crate::mlt::direct::{self, DirectPass};
-use crate::mlt::{MltDriver, MltEstimator, PssmltTarget, PATH_STREAMS};
+use crate::mlt::{MltDriver, MltEstimator, MltSettings, PssmltTarget, PtTarget, PATH_STREAMS};
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use mcmc_core::render_loop::ChainAllocation;
 use pss::RasterParams;
 
-/// `pssmlt`'s settings. [`Default`] is the command line's default: the measured improvements
-/// on the paper's method (large-step MIS, raster steps, a balanced direct-lighting pass over
-/// Sobol points); the presets are the papers' methods.
+/// The path sampler PSSMLT's chains run on: what one primary sample vector means.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PathBase {
+    /// BDPT, every strategy weighted by MIS ([`PssmltTarget`]; the `pssmlt` integrator).
+    #[default]
+    Bdpt,
+    /// The unidirectional path tracer with next-event estimation ([`PtTarget`]; the
+    /// `pssmlt-pt` integrator).
+    Pt,
+}
+
+/// `pssmlt`'s and `pssmlt-pt`'s settings. [`Default`] is `pssmlt`'s command-line default: the
+/// measured improvements on the paper's method (large-step MIS, raster steps, a balanced
+/// direct-lighting pass over Sobol points); the presets are the papers' methods.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PssmltSettings {
+    /// The path sampler the chains run on (default BDPT; [`PathBase::Pt`] is `pssmlt-pt`).
+    pub base: PathBase,
     /// Chains, bootstrap, large and small steps.
     pub chain: ChainSettings,
     /// Combine the large-step samples with the Metropolis estimator by multiple importance
@@ -50,6 +63,7 @@ pub struct PssmltSettings {
 impl Default for PssmltSettings {
     fn default() -> Self {
         Self {
+            base: PathBase::Bdpt,
             chain: ChainSettings::kelemen2002(),
             large_step_mis: true,
             raster: RasterParams::with_probability(pss::RASTER_DEFAULT_PROBABILITY),
@@ -69,6 +83,7 @@ impl PssmltSettings {
     #[must_use]
     pub const fn kelemen2002() -> Self {
         Self {
+            base: PathBase::Bdpt,
             chain: ChainSettings::kelemen2002(),
             large_step_mis: false,
             raster: RasterParams::off(),
@@ -113,6 +128,18 @@ impl PssmltSettings {
         }
     }
 
+    /// These settings over `base`.
+    #[must_use]
+    pub const fn on(self, base: PathBase) -> Self {
+        Self { base, ..self }
+    }
+
+    /// `pssmlt-pt`'s command-line default: [`Default`] over the path tracer.
+    #[must_use]
+    pub fn path_traced() -> Self {
+        Self::default().on(PathBase::Pt)
+    }
+
     /// The direct pass's depth as used (at least 1).
     #[must_use]
     pub const fn pass_depth(&self) -> u32 {
@@ -126,7 +153,10 @@ impl PssmltSettings {
 
 impl Method for PssmltSettings {
     fn kind(&self) -> IntegratorKind {
-        IntegratorKind::Pssmlt
+        match self.base {
+            PathBase::Bdpt => IntegratorKind::Pssmlt,
+            PathBase::Pt => IntegratorKind::PssmltPt,
+        }
     }
 
     fn validate(&self, _common: &RenderSettings) -> Result<(), RenderError> {
@@ -151,7 +181,7 @@ impl Method for PssmltSettings {
         // The separate direct-lighting pass, rendered first; under a time budget the chains
         // get what is left.
         let pass_depth = self.pass_depth();
-        let mut direct: Option<DirectRun> = direct_pass::run(
+        let direct: Option<DirectRun> = direct_pass::run(
             scene,
             &params,
             common,
@@ -162,24 +192,9 @@ impl Method for PssmltSettings {
             &mut notes,
         );
         let spent = direct.as_ref().map(|d| d.elapsed);
-        // A pass whose share of a time budget did not reach every pixel (a huge image) would
-        // leave those pixels without their direct light: drop it, the chains take every depth.
-        if let Some(d) = direct
-            .as_ref()
-            .filter(|d| d.pass.unsampled_pixels > 0 && !d.pass.cancelled)
-        {
-            let pixels = u64::from(common.width) * u64::from(common.height);
-            notes.push(format!(
-                "the direct-lighting pass reached only {:.1} % of the pixels in its share of the time budget: it is dropped and the chains render every depth",
-                100.0 * (pixels - d.pass.unsampled_pixels.min(pixels)) as f64 / pixels as f64
-            ));
-            direct = None;
-        }
-        let min_depth = if direct.is_some() {
-            self.direct.chain_min_depth(common.max_depth, pass_depth)
-        } else {
-            0
-        };
+        let direct = direct_pass::usable(direct, common, &mut notes);
+        let min_depth =
+            direct_pass::chain_min_depth(direct.as_ref(), self.direct, common, pass_depth);
         let mut mlt_settings = self
             .chain
             .mlt_settings(common, PATH_STREAMS, false, run.shard);
@@ -192,51 +207,52 @@ impl Method for PssmltSettings {
             strategy_strata: false,
         };
         push_estimator_notes(&mut notes, self.large_step_mis, &kernel, &self.raster);
-        let targets = [
-            PssmltTarget::new(scene, params, common.width, common.height).with_min_depth(min_depth),
-        ];
-        let out = MltDriver::new(&targets, &mlt_settings)
-            .estimator(estimator)
-            .run(|p: f64| kernel.with_large_step(p), run.progress, run.cancel);
+        let (w, h) = (common.width, common.height);
+        let out = match self.base {
+            PathBase::Bdpt => run_chains(
+                &[PssmltTarget::new(scene, params, w, h).with_min_depth(min_depth)],
+                &mlt_settings,
+                estimator,
+                &kernel,
+                run,
+            ),
+            PathBase::Pt => run_chains(
+                &[
+                    PtTarget::new(scene, w, h, common.max_depth, self.roulette.start)
+                        .with_min_depth(min_depth),
+                ],
+                &mlt_settings,
+                estimator,
+                &kernel,
+                run,
+            ),
+        };
         let chains_ran = out.mutations > 0;
         let mut output = mcmc_output(out, notes, run.start.elapsed());
         if let Some(d) = direct {
-            let depths = format!("path depths 0-{pass_depth}");
-            if output.mcmc.as_ref().is_some_and(|m| m.found_nothing) {
-                output.notes.push(format!(
-                    "the bootstrap found no light on deeper paths: the direct-lighting pass ({depths}) is the whole image"
-                ));
-            } else if !chains_ran {
-                output.notes.push(format!(
-                    "{} before the chains ran: the image holds only the direct-lighting pass ({depths}); the light of deeper paths is missing",
-                    if output.cancelled || run.cancel.load(Ordering::Relaxed) {
-                        "cancelled"
-                    } else {
-                        "stopped"
-                    }
-                ));
-            }
-            output.notes.extend(unsampled_note(
-                d.pass.unsampled_pixels,
-                u64::from(common.width) * u64::from(common.height),
-                d.pass.cancelled,
-                Unsampled::CameraSamples,
-            ));
-            output.unsampled_pixels = d.pass.unsampled_pixels;
-            direct::add_into(&mut output.image, &d.pass.image);
-            if let (Some(partial), Some(c)) = (output.partial.as_mut(), d.pass.component) {
-                partial.components.push(c);
-            }
-            output.dropped_nonfinite += d.pass.dropped;
-            output.cancelled |= d.pass.cancelled;
-            if let Some(stats) = output.mcmc.as_mut() {
-                stats.direct_pass = Some(d.stats);
-                stats.times.direct_pass = d.elapsed;
-            }
+            direct_pass::merge_into(d, &mut output, common, run, chains_ran);
         }
         output.elapsed = run.start.elapsed();
         Ok(output)
     }
+}
+
+/// The chains of `targets` with `kernel` at the driver's large-step probability.
+fn run_chains<T>(
+    targets: &[T],
+    settings: &MltSettings,
+    estimator: MltEstimator,
+    kernel: &PssKernel,
+    run: &Run<'_>,
+) -> crate::mlt::MltOutput
+where
+    T: mcmc_core::Target<State = pss::PssState, Payload = crate::mlt::PathPayload> + Sync,
+{
+    MltDriver::new(targets, settings).estimator(estimator).run(
+        |p: f64| kernel.with_large_step(p),
+        run.progress,
+        run.cancel,
+    )
 }
 
 /// The notes on the large-step MIS estimator and the raster mutation (PSSMLT and MMLT).

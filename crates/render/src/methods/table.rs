@@ -20,6 +20,9 @@ pub enum IntegratorKind {
     Bdpt,
     /// Primary-sample-space MLT over BDPT (Kelemen et al. 2002): all strategies per sample.
     Pssmlt,
+    /// Primary-sample-space MLT over the unidirectional path tracer with next-event
+    /// estimation ([`super::pssmlt`] with [`super::PathBase::Pt`]).
+    PssmltPt,
     /// Multiplexed MLT (Hachisuka et al. 2014): one BDPT strategy per sample, path length
     /// chosen per chain.
     Mmlt,
@@ -98,6 +101,13 @@ pub const INTEGRATORS: &[IntegratorInfo] = &[
         is_mcmc: true,
         kind: IntegratorKind::Pssmlt,
         settings: || PssmltSettings::default().into(),
+    },
+    IntegratorInfo {
+        name: "pssmlt-pt",
+        description: "primary-sample-space MLT over the path tracer with next-event estimation (the PSSMLT of the DRMLT paper and of local QMC's KMLT baseline)",
+        is_mcmc: true,
+        kind: IntegratorKind::PssmltPt,
+        settings: || PssmltSettings::path_traced().into(),
     },
     IntegratorInfo {
         name: "mmlt",
@@ -250,18 +260,18 @@ mod tests {
         // Every variant has a row; the match has no wildcard arm, so a new variant does not
         // compile here until it is added to `all` (and then needs its row).
         use IntegratorKind::{
-            Bdpt, Drmlt, Lqmc, Mala, MalaCache, MalaHybrid, MalaOnline, Mmlt, PathMlt, Pssmlt, Pt,
-            Qmc, QmcFaure,
+            Bdpt, Drmlt, Lqmc, Mala, MalaCache, MalaHybrid, MalaOnline, Mmlt, PathMlt, Pssmlt,
+            PssmltPt, Pt, Qmc, QmcFaure,
         };
         let all = [
-            Pt, Bdpt, Pssmlt, Mmlt, Drmlt, Qmc, QmcFaure, Lqmc, Mala, MalaOnline, MalaCache,
-            MalaHybrid, PathMlt,
+            Pt, Bdpt, Pssmlt, PssmltPt, Mmlt, Drmlt, Qmc, QmcFaure, Lqmc, Mala, MalaOnline,
+            MalaCache, MalaHybrid, PathMlt,
         ];
         assert_eq!(all.len(), INTEGRATORS.len());
         for kind in all {
             match kind {
-                Pt | Bdpt | Pssmlt | Mmlt | Drmlt | Qmc | QmcFaure | Lqmc | Mala | MalaOnline
-                | MalaCache | MalaHybrid | PathMlt => {
+                Pt | Bdpt | Pssmlt | PssmltPt | Mmlt | Drmlt | Qmc | QmcFaure | Lqmc | Mala
+                | MalaOnline | MalaCache | MalaHybrid | PathMlt => {
                     assert_eq!(kind.info().kind, kind)
                 }
             }

@@ -63,6 +63,7 @@ pub struct MltDriver<'a, T, S = PrimarySamples> {
     estimator: MltEstimator,
     normalization: Option<&'a [f64]>,
     round_mutations: Option<u64>,
+    first_depth: u32,
     states: S,
 }
 
@@ -76,6 +77,7 @@ impl<'a, T> MltDriver<'a, T, PrimarySamples> {
             estimator: MltEstimator::plain(),
             normalization: None,
             round_mutations: None,
+            first_depth: 0,
             states: PrimarySamples,
         }
     }
@@ -96,6 +98,16 @@ impl<'a, T, S> MltDriver<'a, T, S> {
     pub fn normalized(self, normalization: &'a [f64]) -> Self {
         Self {
             normalization: Some(normalization),
+            ..self
+        }
+    }
+
+    /// MMLT targets that start at depth `depth` ([`super::MmltTarget::depths_from`], when a
+    /// direct-lighting pass renders the shallower depths): target `i` has depth `depth + i`,
+    /// which the strategy strata ([`MltEstimator::strategy_strata`]) need. Default 0.
+    pub fn first_depth(self, depth: u32) -> Self {
+        Self {
+            first_depth: depth,
             ..self
         }
     }
@@ -122,6 +134,7 @@ impl<'a, T, S> MltDriver<'a, T, S> {
             estimator: self.estimator,
             normalization: self.normalization,
             round_mutations: self.round_mutations,
+            first_depth: self.first_depth,
             states: GivenStates(states),
         }
     }
@@ -342,13 +355,11 @@ where
     /// MMLT's strategy strata, with [`MltEstimator::strategy_strata`].
     fn strata(&self) -> Option<MmltStrata> {
         self.estimator.strategy_strata.then(|| {
-            MmltStrata::new(
+            let targets: u32 = self.targets.len().try_into().unwrap_or(u32::MAX);
+            MmltStrata::for_depths(
                 self.settings.streams,
-                self.targets
-                    .len()
-                    .saturating_sub(1)
-                    .try_into()
-                    .unwrap_or(u32::MAX),
+                self.first_depth,
+                self.first_depth.saturating_add(targets.saturating_sub(1)),
             )
         })
     }

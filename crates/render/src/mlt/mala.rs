@@ -315,22 +315,52 @@ pub fn render(
     progress: &dyn mcmc_core::Progress,
     cancel: &std::sync::atomic::AtomicBool,
 ) -> super::MltOutput {
-    let (w, h) = (settings.width as u32, settings.height as u32);
-    let targets: Vec<_> = MmltTarget::all_depths(scene, params, w, h)
-        .into_iter()
-        .map(|t| DifferentiableMmlt::new(t, config.fd_step).with_method(config.gradient))
-        .collect();
-    super::MltDriver::new(&targets, settings).run_with_controller(
-        super::PerChain(|slot: mcmc_core::render_loop::ChainSlot, p| {
-            let depth = targets[slot.target].depth();
-            if cheap_then_expensive {
-                cheap_then_expensive_kernel(config, depth, small, p)
-            } else {
-                mala_kernel(config, depth, small, p)
-            }
-        }),
-        |_| CacheSharing,
+    render_from_depth(
+        scene,
+        params,
+        config,
+        cheap_then_expensive,
+        settings,
+        small,
+        0,
         progress,
         cancel,
     )
+}
+
+/// [`render`] over the depths `min_depth..=params.max_depth` only
+/// ([`MmltTarget::depths_from`]; a separate direct-lighting pass renders the shallower ones,
+/// as the authors' code renders paths of up to two segments by a separate pass).
+#[allow(clippy::too_many_arguments)]
+pub fn render_from_depth(
+    scene: &crate::scene::Scene,
+    params: crate::bdpt::BdptParams,
+    config: &MalaConfig,
+    cheap_then_expensive: bool,
+    settings: &super::MltSettings,
+    small: SmallMutation,
+    min_depth: u32,
+    progress: &dyn mcmc_core::Progress,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> super::MltOutput {
+    let (w, h) = (settings.width as u32, settings.height as u32);
+    let targets: Vec<_> = MmltTarget::depths_from(scene, params, w, h, min_depth)
+        .into_iter()
+        .map(|t| DifferentiableMmlt::new(t, config.fd_step).with_method(config.gradient))
+        .collect();
+    super::MltDriver::new(&targets, settings)
+        .first_depth(min_depth)
+        .run_with_controller(
+            super::PerChain(|slot: mcmc_core::render_loop::ChainSlot, p| {
+                let depth = targets[slot.target].depth();
+                if cheap_then_expensive {
+                    cheap_then_expensive_kernel(config, depth, small, p)
+                } else {
+                    mala_kernel(config, depth, small, p)
+                }
+            }),
+            |_| CacheSharing,
+            progress,
+            cancel,
+        )
 }

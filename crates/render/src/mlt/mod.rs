@@ -1,5 +1,5 @@
 //! Markov chain Monte Carlo integrators over primary sample space: the path-sampler targets
-//! (PSSMLT over BDPT, MMLT) run through mcmc-core's generic render loop.
+//! (PSSMLT over BDPT or the path tracer, MMLT) run through mcmc-core's generic render loop.
 
 pub mod direct;
 pub mod dr;
@@ -7,6 +7,7 @@ mod driver;
 pub mod mala;
 mod path_sampler;
 pub mod pathmlt;
+mod pt_target;
 mod run;
 mod stage_map;
 mod strata;
@@ -16,6 +17,7 @@ pub use path_sampler::{
     mmlt_depth_normalization, mmlt_depth_normalization_until, DepthNormalization, MmltTarget,
     PathPayload, PssmltTarget, PATH_STREAMS,
 };
+pub use pt_target::PtTarget;
 pub use run::{
     LargeStepMode, MakeKernel, MltBudget, MltEstimator, MltOutput, MltSettings, PerChain,
 };

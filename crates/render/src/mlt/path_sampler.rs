@@ -53,7 +53,8 @@ impl SplatPayload for PathPayload {
     }
 }
 
-fn log_of_total_luminance(splats: &[Splat]) -> f64 {
+/// `ln` of the summed luminance of `splats` (`-inf` for none, NaN for a non-finite sum).
+pub(super) fn log_of_total_luminance(splats: &[Splat]) -> f64 {
     let f: f64 = splats.iter().map(|s| f64::from(luminance(s.rgb))).sum();
     if f > 0.0 && f.is_finite() {
         f.ln()
@@ -137,7 +138,20 @@ impl<'s> MmltTarget<'s> {
     /// [`bdpt::MAX_PATH_DEPTH`] (BDPT's deepest path; a deeper target would sample that depth
     /// again and count its light twice).
     pub fn all_depths(scene: &'s Scene, params: BdptParams, width: u32, height: u32) -> Vec<Self> {
-        (0..=params.max_depth.min(bdpt::MAX_PATH_DEPTH))
+        Self::depths_from(scene, params, width, height, 0)
+    }
+
+    /// The targets for depths `min_depth..=params.max_depth` (at most
+    /// [`bdpt::MAX_PATH_DEPTH`]): the chains' share when a separate pass renders the shallower
+    /// depths ([`super::direct`]); empty if `min_depth` is beyond them.
+    pub fn depths_from(
+        scene: &'s Scene,
+        params: BdptParams,
+        width: u32,
+        height: u32,
+        min_depth: u32,
+    ) -> Vec<Self> {
+        (min_depth..=params.max_depth.min(bdpt::MAX_PATH_DEPTH))
             .map(|depth| Self {
                 scene,
                 params,

@@ -52,11 +52,18 @@ impl MmltStrata {
     /// `streams` (1..=4, clamped; [`super::PATH_STREAMS`] for the path samplers) PSS streams.
     #[must_use]
     pub fn new(streams: usize, max_depth: u32) -> Self {
+        Self::for_depths(streams, 0, max_depth)
+    }
+
+    /// The states of [`MmltTarget::depths_from`]'s targets (depths `min_depth..=max_depth`,
+    /// target `i` of depth `min_depth + i`).
+    #[must_use]
+    pub fn for_depths(streams: usize, min_depth: u32, max_depth: u32) -> Self {
         let streams = streams.clamp(1, pss::MAX_STREAMS);
         Self {
             fresh: FreshPss::new(streams).unwrap_or_else(|_| unreachable!("clamped to 1..=4")),
             strategy_coordinate: Stream::Connection.index().min(streams - 1),
-            strategies: (0..=max_depth.min(MAX_PATH_DEPTH))
+            strategies: (min_depth..=max_depth.min(MAX_PATH_DEPTH))
                 .map(|d| if d == 0 { 1 } else { u64::from(d) + 2 })
                 .collect(),
         }
@@ -65,8 +72,9 @@ impl MmltStrata {
     /// The states for these MMLT targets (their largest depth).
     #[must_use]
     pub fn for_targets(streams: usize, targets: &[MmltTarget<'_>]) -> Self {
-        Self::new(
+        Self::for_depths(
             streams,
+            targets.iter().map(MmltTarget::depth).min().unwrap_or(0),
             targets.iter().map(MmltTarget::depth).max().unwrap_or(0),
         )
     }

@@ -1,6 +1,7 @@
 //! Shared fixtures of the render integration tests.
 #![allow(dead_code, unreachable_pub)]
 
+pub mod coverage;
 pub mod stats;
 
 use glam::{Vec2, Vec3, Vec3A};
