@@ -109,3 +109,29 @@ pub fn ra_mixture<P, G>(
         PerturbOrGlobal::otsu2018(kind),
     )
 }
+
+/// The selection of section 8.1 with the global move split between two global mutations
+/// (components 1 and 2): the perturbation (component 0) with probability
+/// `perturb_probability` where it applies, else 0; of the rest, `second_share` goes to
+/// component 2 and the remainder to component 1. Every component keeps its own Hastings term
+/// (mcmc-core's component-labelled [`Mixture`]), which matters when the global mutations'
+/// densities live on different measures: a bidirectional mutation that keeps vertices of `x`
+/// is singular with respect to an independence sampler's density, so the two cannot be summed
+/// into one transition density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PerturbOrGlobalPair {
+    /// The perturbation and its probability where it applies.
+    pub perturb: PerturbOrGlobal,
+    /// Share of the global probability given to component 2.
+    pub second_share: f64,
+}
+
+impl Selection<Path> for PerturbOrGlobalPair {
+    fn probabilities(&self, x: &Path, probs: &mut [f64]) {
+        let mut two = [0.0; 2];
+        self.perturb.probabilities(x, &mut two);
+        probs[0] = two[0];
+        probs[1] = two[1] * (1.0 - self.second_share);
+        probs[2] = two[1] * self.second_share;
+    }
+}

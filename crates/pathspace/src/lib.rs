@@ -10,10 +10,12 @@
 //!   renderer implements; [`analytic::AnalyticScene`] implements them in f64 for tests.
 //! - [`PathTarget`]: the MLT target `pi = luminance(f)` for mcmc-core's kernels.
 //! - Mutations, each an mcmc-core [`mcmc_core::Proposal`] with its exact transition density:
-//!   [`IndependenceMutation`] (regenerate the path), [`BidirectionalMutation`] (delete a
-//!   subpath and regenerate it from the eye side), [`Perturbation`] (lens and multi-chain,
-//!   with a state-dependent angular scale from a [`ScaleSource`]), and their combination
-//!   [`ra_mixture`] (section 8.1).
+//!   [`IndependenceMutation`] (regenerate the path, e.g. from a [`BidirectionalSampler`] that
+//!   reaches every path a bidirectional path tracer reaches), [`BidirectionalMutation`]
+//!   (delete a subpath and regenerate it from the eye side, the light side or both),
+//!   [`Perturbation`] (lens and multi-chain, with a state-dependent angular scale from a
+//!   [`ScaleSource`]), [`perturb::CausticPerturbation`], and their combination
+//!   [`ra_mixture`] (section 8.1; [`PerturbOrGlobalPair`] splits the global move in two).
 //!
 //! The method page is `docs/methods/pathspace-mlt.md`.
 //!
@@ -47,10 +49,12 @@
 //! ```
 
 pub mod analytic;
+mod bidir_sampler;
 mod bidirectional;
 mod combine;
 mod error;
 mod independence;
+mod lightside;
 mod path;
 pub mod perturb;
 pub mod regional;
@@ -59,8 +63,9 @@ mod scene;
 mod target;
 mod vec3;
 
+pub use bidir_sampler::{BidirectionalSampler, BidirectionalSamplerParams};
 pub use bidirectional::{BidirectionalMutation, BidirectionalParams};
-pub use combine::{ra_mixture, PathMutation, PerturbOrGlobal};
+pub use combine::{ra_mixture, PathMutation, PerturbOrGlobal, PerturbOrGlobalPair};
 pub use error::PathspaceError;
 pub use independence::IndependenceMutation;
 pub use path::{direction, geometry_term, solid_angle_to_area, Path, Vertex};

@@ -94,6 +94,19 @@ pub trait Bsdfs {
 
     /// The probability with which [`Bsdfs::sample`] chooses `lobe` given `wo`.
     fn specular_pdf(&self, p: &SurfacePoint, wo: Vec3, lobe: SpecularLobe) -> f64;
+
+    /// The solid-angle Jacobian `dω_i / dω_o` of the specular map `wo -> wi =
+    /// specular_direction(p, wo, lobe)` at the fixed point `p`: 1 for reflection,
+    /// `(η_o / η_i)^2 cos θ_o / cos θ_i` for refraction (Snell's law in projected solid angle,
+    /// Veach 1997, section 5.2; cosines about the shading normal). Light-side sampling needs it
+    /// to convert densities across specular vertices into [`crate::Path`]'s measure.
+    ///
+    /// The default derives the index ratio from Snell's law on the directions themselves
+    /// (`η_o / η_i = sin θ_i / sin θ_o`, probing a tilted direction near normal incidence); a
+    /// scene that knows its indices should override it. 0 if the lobe does not exist.
+    fn specular_jacobian(&self, p: &SurfacePoint, wo: Vec3, lobe: SpecularLobe) -> f64 {
+        crate::lightside::snell_jacobian(self, p, wo, lobe)
+    }
 }
 
 /// Light sources: emissive surfaces.
@@ -110,6 +123,23 @@ pub trait Emitters {
 
     /// Area density with which [`Emitters::sample_emitter`] produces `p` (0 off the emitters).
     fn emitter_pdf(&self, p: &SurfacePoint) -> f64;
+
+    /// Samples a direction of emission at the emitter point `p` from two uniform numbers:
+    /// the first edge of a light subpath (Veach 1997, section 10.2). Returns the unit direction
+    /// and its solid-angle density, or `None` if `p` emits nowhere.
+    ///
+    /// The default is cosine-weighted about the geometric normal on each side that emits
+    /// (probed with [`Emitters::emitted`] along `±n_g`; both sides equally likely when both
+    /// emit).
+    fn sample_emission_direction(&self, p: &SurfacePoint, u: [f64; 2]) -> Option<(Vec3, f64)> {
+        crate::lightside::cosine_emission_sample(self, p, u)
+    }
+
+    /// Solid-angle density with which [`Emitters::sample_emission_direction`] produces `w`
+    /// at `p`.
+    fn emission_direction_pdf(&self, p: &SurfacePoint, w: Vec3) -> f64 {
+        crate::lightside::cosine_emission_pdf(self, p, w)
+    }
 }
 
 /// A pinhole camera: the first path vertex, fixed (its area measure is a Dirac at

@@ -45,7 +45,14 @@ fn constructors_validate() {
             Err(PathspaceError::InvalidParameter { .. })
         ));
     }
-    assert!(BidirectionalMutation::new(&scene, BidirectionalParams { max_segments: 0 }).is_err());
+    assert!(BidirectionalMutation::new(
+        &scene,
+        BidirectionalParams {
+            max_segments: 0,
+            ..BidirectionalParams::default()
+        }
+    )
+    .is_err());
     assert!(AnalyticScene::furnace_box(1.5, 1.0).is_err());
     let up = Vec3::new(0.0, 1.0, 0.0);
     assert!(PinholeCamera::look_at(Vec3::ZERO, Vec3::ZERO, up, 60.0, 1.0).is_err());

@@ -153,6 +153,7 @@ fn bidirectional_converges() {
         scene,
         BidirectionalParams {
             max_segments: SEGMENTS,
+            ..BidirectionalParams::default()
         },
     )
     .unwrap();
@@ -243,7 +244,14 @@ fn test_box_multi_chain_matches_importance_sampling() {
 #[test]
 fn test_box_bidirectional_matches_importance_sampling() {
     let scene = leak(AnalyticScene::test_box().unwrap());
-    let bidir = BidirectionalMutation::new(scene, BidirectionalParams { max_segments: 4 }).unwrap();
+    let bidir = BidirectionalMutation::new(
+        scene,
+        BidirectionalParams {
+            max_segments: 4,
+            ..BidirectionalParams::default()
+        },
+    )
+    .unwrap();
     let kernel = Mh::new(
         ra_mixture(
             PerturbationKind::MultiChain,

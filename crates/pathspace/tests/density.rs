@@ -16,9 +16,10 @@ use mcmc_core::{Proposal, Proposed};
 use pathspace::analytic::{AnalyticScene, Material, PinholeCamera};
 use pathspace::perturb::DirectionKernel;
 use pathspace::{
-    eye_subpath_end, BidirectionalMutation, BidirectionalParams, FixedScale, IndependentSampler,
-    Path, Perturbation, PerturbationKind, Rgb, TruncatedNormalDirection, UnidirectionalParams,
-    UnidirectionalSampler, Vec3,
+    eye_subpath_end, BidirectionalMutation, BidirectionalParams, BidirectionalSampler,
+    BidirectionalSamplerParams, FixedScale, IndependentSampler, Path, Perturbation,
+    PerturbationKind, Rgb, TruncatedNormalDirection, UnidirectionalParams, UnidirectionalSampler,
+    Vec3,
 };
 use rand::Rng;
 
@@ -122,6 +123,7 @@ fn bidirectional_density_integrates_the_sampler_density() {
         &scene,
         BidirectionalParams {
             max_segments: n_max,
+            ..BidirectionalParams::default()
         },
     )
     .unwrap();
@@ -309,4 +311,82 @@ fn angular_kernel_chi_square() {
     let bad = probabilities(&|t| WithoutSinJacobian.log_density(t, sigma));
     let report = chi_square_test(&observed, &bad, 5.0);
     assert!(report.p_value < 1e-9, "missing sin θ passed: {report:?}");
+}
+
+/// The same identity for the bidirectional mutation with light-side regeneration against the
+/// bidirectional sampler, whose paths include light-traced ones (`t = 1`) and caustics through
+/// the mirror floor and the glass sphere that no eye walk joined to the light reaches: for any
+/// `x`, `E_{y ~ T(.|x)}[p(y) 1{y shares no vertex with x} / T(x -> y)]` is the probability that
+/// the sampler succeeds. Negative control: the density summed over the eye-only split alone
+/// (the earlier eye-side mutation's `T`) for the same candidates misses it.
+#[test]
+fn light_side_bidirectional_density_integrates_the_bidirectional_sampler_density() {
+    let scene = mirror_room();
+    let n_max = 3;
+    let sampler = BidirectionalSampler::new(
+        &scene,
+        BidirectionalSamplerParams {
+            max_segments: n_max,
+        },
+    )
+    .unwrap();
+    let params = BidirectionalParams {
+        max_segments: n_max,
+        light_side: true,
+    };
+    let mutation = BidirectionalMutation::new(&scene, params).unwrap();
+    let eye_only = BidirectionalMutation::new(
+        &scene,
+        BidirectionalParams {
+            light_side: false,
+            ..params
+        },
+    )
+    .unwrap();
+    let mut rng = common::rng(30);
+    let draws = 400_000;
+    let mut p = Path::new();
+    let success = (0..draws)
+        .filter(|_| sampler.sample(&mut rng, &mut p))
+        .count() as f64
+        / draws as f64;
+    let success_se = (success * (1.0 - success) / draws as f64).sqrt();
+    for (seed, edges, n) in [(0u64, 2usize, 1_000_000), (1, 3, 2_000_000)] {
+        let x = loop {
+            let p = common::draw(&sampler, &mut rng);
+            if p.segments() == edges {
+                break p;
+            }
+        };
+        let fresh = |y: &Path| {
+            y.vertices[1].position() != x.vertices[1].position()
+                && y.vertices.last().unwrap().position() != x.vertices.last().unwrap().position()
+        };
+        let (m, se) = reach_mass_where(&mutation, &sampler, &x, n, 31 + seed, fresh);
+        let tol = 4.5 * (se * se + success_se * success_se).sqrt();
+        eprintln!("x with {edges} edges: E[p/T] = {m} +- {se}, success {success} +- {success_se}");
+        assert!(
+            (m - success).abs() < tol && tol < 0.15 * success,
+            "x with {edges} edges: E[p/T] = {m} +- {se}, sampler success {success} +- {success_se}"
+        );
+        // Negative control: the same candidates weighted by the eye-only density.
+        let mut rng = common::rng(31 + seed);
+        let mut y = Path::new();
+        let (mut sum, mut count) = (0.0, 0usize);
+        for _ in 0..n / 10 {
+            if let Proposed::Move { .. } = mutation.propose(&x, &mut y, &mut rng) {
+                if fresh(&y) {
+                    let w = (sampler.log_density(&y) - eye_only.log_q(&x, &y)).exp();
+                    sum += if w.is_finite() { w } else { 1e6 };
+                    count += 1;
+                }
+            }
+        }
+        let wrong = sum / (n / 10) as f64;
+        eprintln!("negative control (eye-only density): {wrong} over {count} fresh candidates");
+        assert!(
+            (wrong - success).abs() > 10.0 * tol,
+            "the eye-only density passed: {wrong} vs {success}"
+        );
+    }
 }

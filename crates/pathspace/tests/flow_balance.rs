@@ -148,7 +148,14 @@ fn ra_mixture_multi_chain() {
 }
 
 fn bidirectional(scene: &AnalyticScene) -> BidirectionalMutation<'_, AnalyticScene> {
-    BidirectionalMutation::new(scene, BidirectionalParams { max_segments: 6 }).unwrap()
+    BidirectionalMutation::new(
+        scene,
+        BidirectionalParams {
+            max_segments: 6,
+            ..BidirectionalParams::default()
+        },
+    )
+    .unwrap()
 }
 
 #[test]
@@ -298,4 +305,69 @@ fn control_with_fixed_sigma_passes() {
         paths,
         &PairwiseParams::with_seed(11),
     );
+}
+
+/// The caustic perturbation (Veach and Guibas 1997, section 5.3.3) on paths
+/// `E D S+ (D|L) ...` of the test box (its glass and mirror spheres and mirror wall): pairs
+/// from paths where it applies.
+#[test]
+fn caustic_perturbation() {
+    use pathspace::perturb::{caustic_chain_end, CausticPerturbation};
+    let scene = scene();
+    let sampler = sampler(&scene);
+    let caustic = CausticPerturbation::new(&scene, 0.05).unwrap();
+    let draw_caustic = |seed: u64| {
+        let mut rng = common::rng(seed);
+        loop {
+            let x = common::draw(&sampler, &mut rng);
+            if caustic_chain_end(&x).is_some() {
+                return (x, rng);
+            }
+        }
+    };
+    let pairs = any::<u64>().prop_map(|s| {
+        let (x, mut rng) = draw_caustic(s);
+        let mut y = Path::new();
+        for _ in 0..8 {
+            if let Proposed::Move { .. } = caustic.propose(&x, &mut y, &mut rng) {
+                return vec![x, y];
+            }
+        }
+        vec![x.clone(), x]
+    });
+    let target = PathTarget::new(&scene);
+    let params = PairwiseParams::with_seed(14);
+    let report = assert_path_balance(&target, &Mh::new(caustic.clone()), pairs, &params);
+    let states = any::<u64>().prop_map(|s| draw_caustic(s).0);
+    let hastings = assert_hastings_consistent(&caustic, states, &params);
+    eprintln!("caustic: {report:?}, Hastings {hastings:?}");
+}
+
+/// The caustic perturbation proposes valid candidates through specular chains.
+#[test]
+fn caustic_candidates_are_valid() {
+    let scene = scene();
+    let sampler = pathspace::BidirectionalSampler::new(
+        &scene,
+        pathspace::BidirectionalSamplerParams { max_segments: 6 },
+    )
+    .unwrap();
+    let caustic = pathspace::perturb::CausticPerturbation::new(&scene, 0.02).unwrap();
+    let mut rng = common::rng(15);
+    let (mut applicable, mut moves) = (0, 0);
+    let mut y = Path::new();
+    for _ in 0..100_000 {
+        let x = common::draw(&sampler, &mut rng);
+        if pathspace::perturb::caustic_chain_end(&x).is_none() {
+            continue;
+        }
+        applicable += 1;
+        if let Proposed::Move { .. } = caustic.propose(&x, &mut y, &mut rng) {
+            y.check_valid(&scene, 1e-7).unwrap();
+            assert!(y.same_structure(&x));
+            moves += 1;
+        }
+    }
+    eprintln!("caustic: {moves} valid moves of {applicable} applicable paths");
+    assert!(moves > 100, "{moves} valid moves of {applicable}");
 }

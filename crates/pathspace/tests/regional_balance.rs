@@ -138,7 +138,14 @@ fn regional_ra_mixture_flow_balance() {
     let m = ra_mixture(
         PerturbationKind::MultiChain,
         Perturbation::multi_chain(&scene, direction_sigmas(&scene)),
-        BidirectionalMutation::new(&scene, BidirectionalParams { max_segments: 6 }).unwrap(),
+        BidirectionalMutation::new(
+            &scene,
+            BidirectionalParams {
+                max_segments: 6,
+                ..BidirectionalParams::default()
+            },
+        )
+        .unwrap(),
     )
     .unwrap();
     check(
@@ -328,6 +335,7 @@ fn regional_multi_chain_and_bidirectional_preserve_pi() {
                 &scene,
                 BidirectionalParams {
                     max_segments: SEGMENTS,
+                    ..BidirectionalParams::default()
                 },
             )
             .unwrap(),

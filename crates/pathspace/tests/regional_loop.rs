@@ -113,6 +113,7 @@ fn bidirectional(
         scene,
         BidirectionalParams {
             max_segments: segments,
+            ..BidirectionalParams::default()
         },
     )
     .unwrap()

@@ -87,6 +87,7 @@ fn bidirectional(scene: &AnalyticScene) -> BidirectionalMutation<'_, AnalyticSce
         scene,
         BidirectionalParams {
             max_segments: SEGMENTS,
+            ..BidirectionalParams::default()
         },
     )
     .unwrap()

@@ -63,6 +63,15 @@ pub enum RenderError {
         /// What the estimate is made of and which flags would make the render fit.
         advice: String,
     },
+    /// The integrator cannot render this scene (e.g. its bootstrap found no light-carrying
+    /// path): refused with the reason instead of a black image reported as success.
+    #[error("integrator {integrator} cannot render this scene: {reason}")]
+    Unrenderable {
+        /// The integrator (its `--integrator` name).
+        integrator: &'static str,
+        /// What it could not do, and what to try instead.
+        reason: String,
+    },
     /// The worker thread pool could not be created.
     #[error("cannot start {threads} worker threads: {reason}")]
     ThreadPool {

@@ -119,7 +119,14 @@ fn varying_sigma(p: &Path) -> [f64; 2] {
 fn bidirectional<'a>(
     view: &'a PathSpaceScene<'a>,
 ) -> BidirectionalMutation<'a, PathSpaceScene<'a>> {
-    BidirectionalMutation::new(view, BidirectionalParams { max_segments: 6 }).unwrap()
+    BidirectionalMutation::new(
+        view,
+        BidirectionalParams {
+            max_segments: 6,
+            ..BidirectionalParams::default()
+        },
+    )
+    .unwrap()
 }
 
 #[test]
@@ -390,4 +397,57 @@ fn multichain_on_glass_is_bit_identical_across_threads() {
         bits(&with(1, 6)) != one,
         "another seed gives the same image"
     );
+}
+
+/// A floor under a one-sided lamp facing `lamp_normal_y` (up: away from everything).
+fn lamp_over_floor(lamp_normal_y: f32) -> Scene {
+    use render::scene::{CameraSpec, Material, Mesh};
+    let mut mesh = Mesh::new();
+    let materials = vec![
+        Material::diffuse("floor", glam::Vec3::splat(0.7), glam::Vec3::ZERO),
+        Material::diffuse("lamp", glam::Vec3::ZERO, glam::Vec3::splat(10.0)),
+    ];
+    let quad = |mesh: &mut Mesh, c: Vec3A, u: Vec3A, v: Vec3A, m: u32| {
+        mesh.add_quad([c - u - v, c + u - v, c + u + v, c - u + v], m);
+    };
+    quad(&mut mesh, Vec3A::ZERO, Vec3A::Z * 2.0, Vec3A::X * 2.0, 0);
+    // u x v = (0, lamp_normal_y, 0) with u = z, v = x * sign.
+    quad(
+        &mut mesh,
+        Vec3A::new(0.0, 1.0, 0.0),
+        Vec3A::Z * 0.2,
+        Vec3A::X * (0.2 * lamp_normal_y),
+        1,
+    );
+    let camera = CameraSpec::look_at(
+        Vec3A::new(0.0, 0.5, 2.0),
+        Vec3A::new(0.0, 0.0, 0.0),
+        Vec3A::Y,
+        60.0,
+    );
+    Scene::new(mesh, materials, vec![], camera, 8, 8)
+}
+
+/// A scene whose light reaches nothing the camera sees is refused with an error naming what
+/// pathmlt could not do (never a black image reported as success); the same scene with the
+/// lamp facing the floor renders (control).
+#[test]
+fn no_light_carrying_path_is_an_error() {
+    let settings = pathmlt_settings();
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    match render(&lamp_over_floor(1.0), &settings, &NoProgress, &cancel) {
+        Err(e @ RenderError::Unrenderable { .. }) => {
+            let msg = e.to_string();
+            eprintln!("{msg}");
+            assert!(
+                msg.contains("pathmlt") && msg.contains("no light-carrying path"),
+                "{msg}"
+            );
+            assert!(msg.contains("--integrator bdpt"), "{msg}");
+        }
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(_) => panic!("rendered a scene without light-carrying paths"),
+    }
+    let out = render(&lamp_over_floor(-1.0), &settings, &NoProgress, &cancel).unwrap();
+    assert!(out.image.mean_luminance() > 0.0);
 }

@@ -154,7 +154,7 @@ fn pathmlt_matches_the_analytic_enclosure() {
 /// loop's default for uniform primary-sample points): the bug of treating path space like
 /// primary sample space.
 struct WithoutInversePdf<'a>(
-    IndependentPaths<pathspace::UnidirectionalSampler<'a, PathSpaceScene<'a>>>,
+    IndependentPaths<pathspace::BidirectionalSampler<'a, PathSpaceScene<'a>>>,
 );
 
 impl IndependentStates<Path> for WithoutInversePdf<'_> {

@@ -2,6 +2,7 @@
 
 use std::f64::consts::{FRAC_1_PI, TAU};
 
+use crate::lightside::cosine_hemisphere;
 use crate::scene::{BsdfSample, SpecularLobe};
 use crate::vec3::{Rgb, Vec3};
 
@@ -58,14 +59,6 @@ pub fn fresnel_dielectric(cos_i: f64, eta: f64) -> f64 {
     let r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     0.5 * (r_parl * r_parl + r_perp * r_perp)
-}
-
-fn cosine_hemisphere(n: Vec3, u: [f64; 2]) -> Vec3 {
-    let (t, b) = n.orthonormal_basis();
-    let r = u[0].sqrt();
-    let phi = TAU * u[1];
-    let z = (1.0 - u[0]).max(0.0).sqrt();
-    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * z).normalize()
 }
 
 fn phong_lobe(axis: Vec3, exponent: f64, u: [f64; 2]) -> Vec3 {
@@ -229,6 +222,29 @@ impl Material {
                 }
             }
             _ => Rgb::BLACK,
+        }
+    }
+
+    /// The solid-angle Jacobian `dω_i / dω_o` of a specular lobe (see
+    /// [`crate::Bsdfs::specular_jacobian`]): 1 for reflection, `cos θ_o / (η^2 cos θ_t)` for
+    /// refraction with `η = η_t / η_o`.
+    #[must_use]
+    pub fn specular_jacobian(&self, n: Vec3, wo: Vec3, lobe: SpecularLobe) -> f64 {
+        let Some(wi) = self.specular_direction(n, wo, lobe) else {
+            return 0.0;
+        };
+        match (*self, lobe) {
+            (Material::Dielectric { ior, .. }, SpecularLobe::Refraction) => {
+                let cos_o = wo.dot(n);
+                let eta = if cos_o > 0.0 { ior } else { 1.0 / ior };
+                let cos_t = wi.dot(n).abs();
+                if cos_t > 0.0 {
+                    cos_o.abs() / (eta * eta * cos_t)
+                } else {
+                    0.0
+                }
+            }
+            _ => 1.0,
         }
     }
 

@@ -424,6 +424,11 @@ impl Bsdfs for AnalyticScene {
             .material
             .specular_pdf(p.shading_normal, wo, lobe)
     }
+    fn specular_jacobian(&self, p: &SurfacePoint, wo: Vec3, lobe: SpecularLobe) -> f64 {
+        self.shape(p)
+            .material
+            .specular_jacobian(p.shading_normal, wo, lobe)
+    }
 }
 
 impl Emitters for AnalyticScene {

@@ -2,9 +2,11 @@
 //! section 3.3) with exact transition densities and a state-dependent angular scale.
 
 mod angular;
+mod caustic;
 mod scale;
 
 pub use angular::{angle_between, rotate_direction, DirectionKernel, TruncatedNormalDirection};
+pub use caustic::{caustic_chain_end, CausticPerturbation};
 pub use scale::{FixedScale, ScaleSource};
 
 use mcmc_core::proposal::ScaledProposal;

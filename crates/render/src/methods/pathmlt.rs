@@ -65,6 +65,22 @@ impl PathMltSettings {
     }
 }
 
+/// The refusal of a render whose bootstrap found no light-carrying path: its independent
+/// sampler reaches every path a bidirectional path tracer reaches, so either the scene sends
+/// no light to the camera within `--max-depth` or the light is too rare for the bootstrap;
+/// either way a black image would not be an answer.
+fn nothing_found(message: &str, max_depth: u32) -> RenderError {
+    RenderError::Unrenderable {
+        integrator: "pathmlt",
+        reason: format!(
+            "{message} (bidirectional paths of at most {} edges); raise \
+             --bootstrap-samples or --max-depth, check that a light can reach the camera, or \
+             render with --integrator bdpt",
+            u64::from(max_depth) + 1
+        ),
+    }
+}
+
 impl Method for PathMltSettings {
     fn kind(&self) -> IntegratorKind {
         IntegratorKind::PathMlt
@@ -127,6 +143,9 @@ impl Method for PathMltSettings {
             run.progress,
             run.cancel,
         )?;
+        if let Some(message) = &out.message {
+            return Err(nothing_found(message, common.max_depth));
+        }
         let mut notes = emitter_notes(scene);
         notes.push(format!(
             "path-space MLT: {} perturbation (sigma {}) and the bidirectional mutation, 0.5 each; no large steps",

@@ -12,9 +12,10 @@ use pathspace::regional::{
     RegionalSigmas, ScreenPartition, SharedRegionalAdaptation, SharedSigmas,
 };
 use pathspace::{
-    ra_mixture, BidirectionalMutation, BidirectionalParams, FixedScale, IndependentSampler, Path,
-    PathContribution, PathMutation, PathTarget, PerturbOrGlobal, Perturbation, PerturbationKind,
-    ScaleSource, UnidirectionalParams, UnidirectionalSampler,
+    BidirectionalMutation, BidirectionalParams, BidirectionalSampler, BidirectionalSamplerParams,
+    FixedScale, IndependenceMutation, IndependentSampler, Path, PathContribution, PathMutation,
+    PathTarget, PerturbOrGlobal, PerturbOrGlobalPair, Perturbation, PerturbationKind, ScaleSource,
+    UnidirectionalParams, UnidirectionalSampler,
 };
 use rand::SeedableRng;
 
@@ -156,14 +157,27 @@ impl<Smp: IndependentSampler + Sync> IndependentStates<Path> for IndependentPath
     }
 }
 
-/// The mutation of pathmlt: a perturbation and the bidirectional mutation, 0.5 each, the
-/// bidirectional mutation where the perturbation cannot apply (RA paper, section 8.1).
+/// The global moves of pathmlt, components 1 and 2 of its mixture: Veach and Guibas'
+/// bidirectional mutation (section 5.2) with eye-side and light-side regeneration, and the
+/// independence mutation drawing from [`independent_sampler`]. Either reaches, in one step,
+/// every path a bidirectional path tracer reaches; the independence mutation proposes small
+/// isolated features (a light seen through two mirrors) in proportion to the sampler's
+/// density rather than only through deletions of the whole path.
+pub type GlobalMutation<'a> = PathMutation<
+    BidirectionalMutation<'a, PathSpaceScene<'a>>,
+    IndependenceMutation<BidirectionalSampler<'a, PathSpaceScene<'a>>>,
+>;
+
+/// Share of the global probability given to the independence mutation (component 2).
+pub const GLOBAL_INDEPENDENCE_PROBABILITY: f64 = 0.5;
+
+/// The mutation of pathmlt: a perturbation (component 0) with probability 0.5 where it
+/// applies, the rest split between the bidirectional mutation (component 1) and the
+/// independence mutation (component 2), each with its own Hastings term (RA paper, section
+/// 8.1, with the global move split).
 pub type PathMltMutation<'a> = Mixture<
-    PathMutation<
-        Perturbation<'a, PathSpaceScene<'a>, FixedScale>,
-        BidirectionalMutation<'a, PathSpaceScene<'a>>,
-    >,
-    PerturbOrGlobal,
+    PathMutation<Perturbation<'a, PathSpaceScene<'a>, FixedScale>, GlobalMutation<'a>>,
+    PerturbOrGlobalPair,
 >;
 
 /// Path lengths of pathmlt for render's `max_depth` (bounces): at most `max_depth + 1` edges,
@@ -178,12 +192,32 @@ pub fn max_segments(max_depth: u32) -> Result<usize, RenderError> {
     Ok(max_depth as usize + 1)
 }
 
-/// The independent sampler of the bootstrap: `pathspace::UnidirectionalSampler` with paths of
-/// `1..=max_segments` edges and connection probability 1/2.
+/// The independent sampler of the bootstrap and of the independence mutation:
+/// `pathspace::BidirectionalSampler` with paths of `1..=max_segments` edges, every strategy of
+/// a bidirectional path tracer (eye and light subpaths of every length, joined by an edge or
+/// by hitting the emitter), so `f / p` is BDPT's balance-heuristic estimate.
 ///
 /// # Errors
 /// As [`max_segments`].
 pub fn independent_sampler<'a>(
+    scene: &'a PathSpaceScene<'a>,
+    max_depth: u32,
+) -> Result<BidirectionalSampler<'a, PathSpaceScene<'a>>, RenderError> {
+    let params = BidirectionalSamplerParams {
+        max_segments: max_segments(max_depth)?,
+    };
+    BidirectionalSampler::new(scene, params)
+        .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))
+}
+
+/// The eye-side sampler pathmlt used before [`independent_sampler`]:
+/// `pathspace::UnidirectionalSampler` with paths of `1..=max_segments` edges and connection
+/// probability 1/2. It cannot reach paths whose light arrives only through specular vertices
+/// seen from a diffuse one (`L S+ D E` with a small light): kept for comparisons.
+///
+/// # Errors
+/// As [`max_segments`].
+pub fn unidirectional_sampler<'a>(
     scene: &'a PathSpaceScene<'a>,
     max_depth: u32,
 ) -> Result<UnidirectionalSampler<'a, PathSpaceScene<'a>>, RenderError> {
@@ -218,18 +252,15 @@ pub type AdaptPartition<'a> = PathPartition<&'a PathSpaceScene<'a>>;
 pub type AdaptiveMutation<'a> = Mixture<
     PathMutation<
         Perturbation<'a, PathSpaceScene<'a>, SharedSigmas<AdaptPartition<'a>>>,
-        BidirectionalMutation<'a, PathSpaceScene<'a>>,
+        GlobalMutation<'a>,
     >,
-    PerturbOrGlobal,
+    PerturbOrGlobalPair,
 >;
 
 /// The mutation of pathmlt with the perturbation's scales from `Sc`.
 type ScaledMutation<'a, Sc> = Mixture<
-    PathMutation<
-        Perturbation<'a, PathSpaceScene<'a>, Sc>,
-        BidirectionalMutation<'a, PathSpaceScene<'a>>,
-    >,
-    PerturbOrGlobal,
+    PathMutation<Perturbation<'a, PathSpaceScene<'a>, Sc>, GlobalMutation<'a>>,
+    PerturbOrGlobalPair,
 >;
 
 /// The mutation of pathmlt with `kind` of perturbation whose scales come from `scale`.
@@ -243,12 +274,24 @@ fn mutation_with_scale<'a, Sc: ScaleSource>(
         scene,
         BidirectionalParams {
             max_segments: max_segments(max_depth)?,
+            ..BidirectionalParams::default()
         },
     )
     .map_err(|_| RenderError::setting("max-depth", max_depth, DEPTH_RANGE))?;
-    let perturbation = Perturbation::new(scene, kind, scale);
-    ra_mixture(kind, perturbation, bidirectional)
-        .map_err(|e| RenderError::setting("perturbation", e, "lens|multichain"))
+    let independence = IndependenceMutation::new(independent_sampler(scene, max_depth)?);
+    let selection = PerturbOrGlobalPair {
+        perturb: PerturbOrGlobal::otsu2018(kind),
+        second_share: GLOBAL_INDEPENDENCE_PROBABILITY,
+    };
+    Mixture::new(
+        vec![
+            PathMutation::Perturb(Perturbation::new(scene, kind, scale)),
+            PathMutation::Global(PathMutation::Perturb(bidirectional)),
+            PathMutation::Global(PathMutation::Global(independence)),
+        ],
+        selection,
+    )
+    .map_err(|e| RenderError::setting("perturbation", e, "lens|multichain"))
 }
 
 /// Renders `scene` (its camera at `settings.width x settings.height`) with path-space MLT:
