@@ -33,6 +33,7 @@ use render::image::Image;
 use render::integrator::lqmc::{render_lqmc, LqmcParams};
 use render::integrator::pt_driver::PtDriverSettings;
 use render::integrator::qmc::{render_qmc, render_qmc_with};
+use render::methods::{LqmcSettings, MethodSettings};
 use render::scene::Scene;
 use render::session::{render, IntegratorKind, NoProgress, RenderSettings};
 
@@ -52,13 +53,13 @@ fn critical() -> f64 {
     t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R - 1) as u32)
 }
 
-/// LQMC exploring every contribution, NEE included (the authors' code's `N = 7` for NEE):
-/// most of the image then comes from re-traced and reconnected members.
+/// LQMC exploring every contribution, NEE included (the authors' code's `N = 7` for NEE,
+/// the named preset `LqmcSettings::tessari2020_code`): most of the image then comes from
+/// re-traced and reconnected members.
 fn explore_all() -> LqmcParams {
-    LqmcParams {
-        explore_nee: true,
-        ..LqmcParams::default()
-    }
+    let params = LqmcSettings::tessari2020_code().params;
+    assert!(params.explore_nee);
+    params
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -324,13 +325,51 @@ fn negative_controls_fail_the_same_tests() {
     );
 }
 
+/// The NEE-explored preset's own negative control, on the Cornell box, where most of the
+/// light is NEE paths the preset explores and the paper's rule splats unexplored: the
+/// preset with the suffix density left out of the weights fails the test it passes in
+/// [`cornell_box_matches_bdpt`], and most of its contributions are explored NEE paths.
+#[test]
+fn nee_explored_negative_control_fails_on_the_cornell_box() {
+    let (scene, reference) = cornell();
+    let s = pt_settings(scene, 2, CORNELL_DEPTH, 1);
+    let cancel = AtomicBool::new(false);
+    let code = render_lqmc(scene, &s, &explore_all(), &NoProgress, &cancel);
+    let paper = render_lqmc(scene, &s, &LqmcParams::default(), &NoProgress, &cancel);
+    eprintln!(
+        "cornell: code {} explored ({} NEE), {} unexplored ({} NEE); paper {} explored, {} unexplored ({} NEE)",
+        code.explored, code.explored_nee, code.direct, code.direct_nee,
+        paper.explored, paper.direct, paper.direct_nee
+    );
+    assert!(
+        code.explored_nee > code.direct && code.direct_nee == 0,
+        "{code:?}"
+    );
+    assert!(
+        paper.explored_nee == 0 && paper.direct_nee >= code.explored_nee,
+        "{paper:?}"
+    );
+    let wrong = LqmcParams {
+        suffix_density_in_weights: false,
+        ..explore_all()
+    };
+    let images = replicates(Method::Lqmc(wrong), scene, 8, CORNELL_DEPTH, 21);
+    let t = max_t(&images, reference);
+    eprintln!("cornell, lqmc (NEE explored) without suffix density: max |T| {t:.2}");
+    assert!(t > critical(), "the wrong weights passed: max |T| = {t}");
+}
+
 #[test]
 fn same_seed_one_and_two_threads_are_bit_identical() {
     let scene = scene_file("cornell-glass.gltf", 40);
-    for integrator in [IntegratorKind::Qmc, IntegratorKind::Lqmc] {
+    for method in [
+        IntegratorKind::Qmc.settings(),
+        IntegratorKind::Lqmc.settings(),
+        MethodSettings::Lqmc(LqmcSettings::tessari2020_code()),
+    ] {
         let run = |threads| {
             let settings = RenderSettings {
-                method: integrator.settings(),
+                method,
                 width: 40,
                 height: 24,
                 budget: Budget::SamplesPerPixel(2),
@@ -346,11 +385,11 @@ fn same_seed_one_and_two_threads_are_bit_identical() {
                 .collect::<Vec<_>>()
         };
         let one = run(1);
-        assert!(one == run(2), "{integrator:?}: 1 and 2 threads differ");
+        assert!(one == run(2), "{method:?}: 1 and 2 threads differ");
         // Negative control: another seed changes the bits.
         let other = {
             let settings = RenderSettings {
-                method: integrator.settings(),
+                method,
                 width: 40,
                 height: 24,
                 budget: Budget::SamplesPerPixel(2),
