@@ -301,7 +301,8 @@ fn dof_scene_matches_bdpt() {
     }
 }
 
-/// Negative controls: LQMC without the suffix density in its weights (reconnections from
+/// Negative controls: LQMC with NEE explored (the authors' code's preset) without the
+/// suffix density in its weights (reconnections from
 /// `z_b` to `z_{b+1}` weighted as if their density did not depend on the prefix), and a
 /// Halton QMC render with direct light only (max depth 1), are detected on the
 /// depth-of-field scene.
@@ -325,13 +326,17 @@ fn negative_controls_fail_the_same_tests() {
     );
 }
 
-/// The NEE-explored preset's own negative control, on the Cornell box, where most of the
-/// light is NEE paths the preset explores and the paper's rule splats unexplored: the
-/// preset with the suffix density left out of the weights fails the test it passes in
-/// [`cornell_box_matches_bdpt`], and most of its contributions are explored NEE paths.
+/// The NEE-explored preset explores the NEE paths the paper's rule splats unexplored: on the
+/// Cornell box, where nearly all light arrives by next-event estimation, nearly every
+/// contribution of the preset is an explored NEE path and none is an unexplored one; the
+/// paper's preset (the negative control) explores none of them. (Its convergence to BDPT is
+/// tested with the other methods; its wrong-weights control is in
+/// [`negative_controls_fail_the_same_tests`]: leaving the suffix density out fails on the
+/// depth-of-field scene. On the Cornell box that control would pass, as it must: an NEE
+/// path's static suffix is the light vertex, whose density does not depend on the prefix.)
 #[test]
-fn nee_explored_negative_control_fails_on_the_cornell_box() {
-    let (scene, reference) = cornell();
+fn nee_explored_preset_explores_the_nee_paths() {
+    let (scene, _) = cornell();
     let s = pt_settings(scene, 2, CORNELL_DEPTH, 1);
     let cancel = AtomicBool::new(false);
     let code = render_lqmc(scene, &s, &explore_all(), &NoProgress, &cancel);
@@ -342,21 +347,16 @@ fn nee_explored_negative_control_fails_on_the_cornell_box() {
         paper.explored, paper.direct, paper.direct_nee
     );
     assert!(
-        code.explored_nee > code.direct && code.direct_nee == 0,
+        code.explored_nee > 10 * code.direct && code.direct_nee == 0,
         "{code:?}"
     );
+    assert!(code.explored_nee <= code.explored);
+    // Negative control: the paper's rule.
     assert!(
         paper.explored_nee == 0 && paper.direct_nee >= code.explored_nee,
         "{paper:?}"
     );
-    let wrong = LqmcParams {
-        suffix_density_in_weights: false,
-        ..explore_all()
-    };
-    let images = replicates(Method::Lqmc(wrong), scene, 8, CORNELL_DEPTH, 21);
-    let t = max_t(&images, reference);
-    eprintln!("cornell, lqmc (NEE explored) without suffix density: max |T| {t:.2}");
-    assert!(t > critical(), "the wrong weights passed: max |T| = {t}");
+    assert!(paper.direct_nee <= paper.direct);
 }
 
 #[test]
