@@ -1,5 +1,6 @@
 //! Local quasi-Monte Carlo exploration (Tessari, Hanika & Dachsbacher 2020): the 2-D toy of
-//! Fig. 2 and an equal-time renderer comparison with temporal stability.
+//! Fig. 2 and an equal-time renderer comparison with temporal stability, every method over
+//! the same sampler.
 //!
 //! The toy: `N = 128` points on the unit torus, the rank-1 lattice `g = (1, 12)` against a
 //! Markov chain of uniform steps in `[-1/sqrt(N), 1/sqrt(N)]^2`, on the full torus and locally
@@ -7,24 +8,27 @@
 //! tile): `toy_full.png`, `toy_local.png` (lattice red, chain blue) and the cells of an 8 x 8
 //! grid each set hits (`--no-toy` skips it).
 //!
-//! The renders (`--no-scenes` skips them): `QmcSettings::default()` (Halton points),
-//! `PssmltSettings::kelemen2002()` (the paper's KMLT) and `LqmcSettings::tessari2020()`, max
-//! depth 5, on dof, caustic-pool, ajar-door: 2 s per render, 10 seeds, 64 x 64, every core.
+//! The renders (`--no-scenes` skips them), all over one base sampler, the unidirectional path
+//! tracer with next-event estimation and no Russian roulette (LQMC's tracer has none; max
+//! depth 5 bounds every path): Halton QMC (`QmcSettings` with roulette off), KMLT as the
+//! authors' renderer runs it (`PssmltSettings::corona13_kmlt()`: PSSMLT over the path tracer,
+//! large steps 0.2, a uniform small step of 0.01), LQMC by the paper's rule
+//! (`LqmcSettings::tessari2020()`: NEE paths splatted unexplored) and by the authors' code
+//! (`LqmcSettings::tessari2020_code()`: NEE paths explored with `N = 7`); `--bdpt-kmlt` adds
+//! the earlier pairing, PSSMLT/K over all-strategy BDPT (`PssmltSettings::kelemen2002()`).
+//! Scenes dof, caustic-pool, ajar-door; 30 s per render, 5 seeds, 128 x 128, every core.
 //! The `experiments` harness writes per scene `<out>/<scene>/` (every seed's image, `run.json`,
 //! `report.html`), `results.md` (its table: relMSE, MSE, rRMSE, MAD against the BDPT reference,
-//! samples/s; then this example's temporal stability: per-pixel luminance variance across the
-//! seeds' renders, the frames of a still animation, next to the mean MSE, and its 8 x 8-block
-//! ratio, 1 for uncorrelated noise, more for blotches; and LQMC's counters for the first seed)
-//! and `results.csv`. `--quick`: 0.25 s, 2 seeds, 16 x 16.
+//! samples/s; then the temporal stability: the seeds' renders as the frames of a still
+//! animation, as the paper's video loops frames rendered with different seeds: the per-pixel
+//! luminance variance across frames next to the mean MSE, and the 8 x 8-block ratio, 1 for
+//! uncorrelated noise, more for blotches; and both LQMC variants' counters, explored and
+//! unexplored contributions, summed over the seeds) and `results.csv`. The paper's video has
+//! 10 frames: `--seeds 10`. `--quick`: 0.25 s, 2 seeds, 16 x 16.
 //!
-//! Changed from the hand-written example: relMSE, MAD and samples/s (wall clock of the render
-//! call) are in the harness's table, which comes first in `results.md`, then the toy, then the
-//! temporal table; `results.csv` has the harness's columns; the LQMC line comes from typed
-//! statistics (`RenderOutput::lqmc`); one seed is allowed (temporal columns `-`); the shared
-//! flags (`--spp`, `--threads`, `--first-seed`, `--no-report`, `--quick`) are new.
-//!
-//! `cargo run --release --example lqmc -- [--no-toy] [--no-scenes]` and the shared flags
-//! (`--time 2`, `--seeds 10`, `--size 64`, `--out target/lqmc`, `--quick`, scenes; `--help`).
+//! `cargo run --release --example lqmc -- [--no-toy] [--no-scenes] [--bdpt-kmlt]` and the
+//! shared flags (`--time 30`, `--seeds 5`, `--size 128`, `--threads`, `--out target/lqmc`,
+//! `--no-report`, `--quick`, scenes; `--help`).
 
 use std::path::Path;
 
@@ -49,7 +53,14 @@ struct Args {
     /// Skip the renders.
     #[arg(long)]
     no_scenes: bool,
+    /// Also render PSSMLT/K over all-strategy BDPT (the earlier, unequal pairing).
+    #[arg(long)]
+    bdpt_kmlt: bool,
 }
+
+/// The LQMC variants compared (their counters are reported).
+const LQMC_PAPER: &str = "LQMC (paper: NEE unexplored)";
+const LQMC_CODE: &str = "LQMC (code: NEE explored, N = 7)";
 
 /// A compared method: a paper preset at max depth 5.
 fn method(name: &str, slug: &str, preset: impl Into<MethodSettings>) -> Method {
@@ -59,9 +70,10 @@ fn method(name: &str, slug: &str, preset: impl Into<MethodSettings>) -> Method {
 }
 
 fn main() -> Res<()> {
-    let mut defaults = Defaults::new("lqmc", Regime::seconds(2.0));
+    let mut defaults = Defaults::new("lqmc", Regime::seconds(30.0));
     let scenes = ["dof", "caustic-pool", "ajar-door"];
-    (defaults.scenes, defaults.seeds) = (scenes.map(String::from).to_vec(), 10);
+    (defaults.scenes, defaults.seeds) = (scenes.map(String::from).to_vec(), 5);
+    defaults.size = 128;
     defaults.out = "target/lqmc".into();
     (defaults.quick.scenes, defaults.quick.regime) = (None, Regime::seconds(0.25));
     let args = experiments::parse::<Args>(&defaults);
@@ -74,31 +86,67 @@ fn main() -> Res<()> {
         println!("{toy}");
         return Ok(());
     }
-    let first = plan.seeds[0];
     let mut counters = RunValues::default();
+    let qmc = QmcSettings {
+        roulette: None,
+        ..QmcSettings::default()
+    };
+    let mut methods = vec![
+        method("Halton QMC", "qmc", qmc),
+        method(
+            "KMLT (corona-13, over PT)",
+            "kmlt-pt",
+            PssmltSettings::corona13_kmlt(),
+        ),
+        method(LQMC_PAPER, "lqmc", LqmcSettings::tessari2020()),
+        method(LQMC_CODE, "lqmc-code", LqmcSettings::tessari2020_code()),
+    ];
+    if args.bdpt_kmlt {
+        let kmlt = PssmltSettings::kelemen2002();
+        methods.push(method("PSSMLT/K over BDPT", "pssmlt-k", kmlt));
+    }
     let results = Experiment::new(plan)
-        .methods([
-            method("Halton QMC", "qmc", QmcSettings::default()),
-            method("PSSMLT/K (KMLT)", "pssmlt-k", PssmltSettings::kelemen2002()),
-            method("LQMC", "lqmc", LqmcSettings::tessari2020()),
-        ])
+        .methods(methods)
         .baseline("Halton QMC")
         .parameter("max depth", 5)
+        .parameter("base sampler", "PT + NEE, no Russian roulette")
         .inspect(|record, output, _| output.lqmc.map_or((), |s| counters.push(record, s)))
         .run()?;
-    results.write(&(toy + &temporal(&results, &counters, first)?))?;
+    results.write(&(toy + &temporal(&results, &counters)?))?;
     Ok(())
 }
 
-/// Per scene the temporal-stability table (8 x 8 blocks) and LQMC's counters.
-fn temporal(results: &Results, lqmc: &RunValues<LqmcStats>, first: u64) -> Res<String> {
-    let seeds = results.plan.seeds.len();
-    let mut md = format!("\n## Temporal stability ({seeds} seeds as frames)\n");
+/// Per scene the temporal-stability table (8 x 8 blocks) and the LQMC variants' counters
+/// summed over the seeds.
+fn temporal(results: &Results, lqmc: &RunValues<LqmcStats>) -> Res<String> {
+    let seeds = &results.plan.seeds;
+    let mut md = format!(
+        "\n## Temporal stability ({} seeds as frames)\n",
+        seeds.len()
+    );
     for scene in &results.scenes {
         let table = results.temporal_table(scene, 8)?.to_markdown();
         md += &format!("\n### {scene}\n\n{table}");
-        if let Some(s) = lqmc.get(scene, "LQMC", first) {
-            md += &format!("\nLQMC, seed {first}: {s}.\n");
+        for name in [LQMC_PAPER, LQMC_CODE] {
+            let runs: Vec<LqmcStats> = seeds
+                .iter()
+                .filter_map(|&seed| lqmc.get(scene, name, seed).copied())
+                .collect();
+            if runs.is_empty() {
+                continue;
+            }
+            let sum = |f: fn(&LqmcStats) -> u64| runs.iter().map(f).sum::<u64>();
+            let n = runs.len() as u64;
+            md += &format!(
+                "\n{name}, per render (mean of {n}): {} seeds, {} contributions explored ({} NEE), {} splatted unexplored ({} NEE), {} members, {} rejected.\n",
+                sum(|s| s.seeds) / n,
+                sum(|s| s.explored) / n,
+                sum(|s| s.explored_nee) / n,
+                sum(|s| s.direct) / n,
+                sum(|s| s.direct_nee) / n,
+                sum(|s| s.members) / n,
+                sum(|s| s.rejected) / n,
+            );
         }
     }
     Ok(md)

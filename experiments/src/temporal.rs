@@ -38,8 +38,9 @@ impl Results {
 
     /// Per method on `scene`: the mean MSE over seeds, the temporal variance
     /// ([`TemporalVariance::pixel_variance`]), their ratio (the noise part of the error, 1 for
-    /// an unbiased method's converged mean) and the `block x block` ratio; `-` where a method
-    /// has fewer than two seeds.
+    /// an unbiased method's converged mean), the `block x block` ratio and the block means'
+    /// variance ([`TemporalVariance::block_variance`], the low-frequency flicker itself); `-`
+    /// where a method has fewer than two seeds.
     ///
     /// # Errors
     /// As [`Results::images`].
@@ -50,6 +51,7 @@ impl Results {
             "temporal variance (mean per-pixel)".to_owned(),
             "variance / mean MSE".to_owned(),
             format!("{block}x{block}-block variance ratio"),
+            format!("{block}x{block}-block-mean variance"),
         ]);
         let show = |v: f64, digits: usize| {
             if v.is_nan() {
@@ -63,15 +65,18 @@ impl Results {
         for method in &self.methods {
             let mse = self.values(scene, method, Measure::Mse);
             let mean = mse.iter().sum::<f64>() / mse.len() as f64;
-            let (var, ratio) = self
+            let (var, ratio, blocks) = self
                 .temporal_variance(scene, method, block)?
-                .map_or((f64::NAN, f64::NAN), |t| (t.pixel_variance, t.block_ratio));
+                .map_or((f64::NAN, f64::NAN, f64::NAN), |t| {
+                    (t.pixel_variance, t.block_ratio, t.block_variance())
+                });
             table.push_row([
                 method.clone(),
                 show(mean, 0),
                 show(var, 0),
                 show(var / mean, 2),
                 show(ratio, 2),
+                show(blocks, 0),
             ]);
         }
         Ok(table)
@@ -102,6 +107,14 @@ pub struct TemporalVariance {
 }
 
 impl TemporalVariance {
+    /// The variance across frames of a `block x block` block's mean luminance, averaged over
+    /// the blocks (`block_ratio * pixel_variance / block^2`): the low-frequency flicker in
+    /// absolute terms, comparable between methods whose pixel noise differs.
+    #[must_use]
+    pub fn block_variance(&self) -> f64 {
+        self.block_ratio * self.pixel_variance / (self.block * self.block) as f64
+    }
+
     /// The temporal variance of `frames` with blocks of `block x block` pixels; `None` for
     /// fewer than two frames, empty images or frames of different sizes.
     ///
@@ -196,11 +209,14 @@ mod tests {
         let t = TemporalVariance::of(&offsets, 4).unwrap();
         assert!((t.block_ratio - 16.0).abs() < 1e-9, "{t:?}");
         assert_eq!(t.frames, 3);
+        // The block means are the frame values 1, 2, 4: their variance is 7/3.
+        assert!((t.block_variance() - 7.0 / 3.0).abs() < 1e-9, "{t:?}");
         // Negative control: a checkerboard sign flip per frame leaves every block mean fixed.
         let checker = |s: f32| frame(move |x, y| 2.0 + if (x + y) % 2 == 0 { s } else { -s });
         let t = TemporalVariance::of(&[checker(1.0), checker(-1.0)], 4).unwrap();
         assert!((t.pixel_variance - 2.0).abs() < 1e-9, "{t:?}");
         assert!(t.block_ratio.abs() < 1e-12, "{t:?}");
+        assert!(t.block_variance().abs() < 1e-12, "{t:?}");
     }
 
     #[test]
@@ -236,6 +252,7 @@ mod tests {
         }
         let table = results.temporal_table("cornell-box", 4).unwrap();
         assert_eq!(table.headers()[4], "4x4-block variance ratio");
+        assert_eq!(table.headers()[5], "4x4-block-mean variance");
         assert_eq!(table.rows()[1][0], "BDPT");
         assert_ne!(table.rows()[1][2], "-");
         // Negative control: an unknown method has no images, a missing file is an error.

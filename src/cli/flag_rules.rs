@@ -201,6 +201,11 @@ pub(crate) const RULES: &[FlagRule] = &[
         applies: |m| matches!(m, M::Mala(_)) || drmlt_langevin(m),
         also: "drmlt with --dr-variant cheap-then-expensive",
     },
+    FlagRule {
+        id: "lqmc_preset",
+        applies: |m| m.kind() == K::Lqmc,
+        also: "",
+    },
 ];
 
 /// Fails if a flag `given` on the command line has no effect on `method`, naming the flag, the
@@ -268,6 +273,7 @@ mod tests {
         ("mala_preset", Some(["paper", "code"])),
         ("mala_max_depth", Some(["2", "4"])),
         ("mala_gradient", Some(["dual", "fd"])),
+        ("lqmc_preset", Some(["code", "paper"])),
     ];
 
     const MCMC_PSS: &[&str] = &[
@@ -311,6 +317,7 @@ mod tests {
             "dr_variant" | "dr_on" => vec!["drmlt"],
             "perturbation" | "adapt" => vec!["pathmlt"],
             "mala_preset" | "mala_max_depth" | "mala_gradient" => MALA.to_vec(),
+            "lqmc_preset" => vec!["lqmc"],
             other => panic!("no expectation for {other}"),
         }
     }

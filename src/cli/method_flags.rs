@@ -69,9 +69,10 @@ pub(crate) struct MethodFlags {
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=64))]
     pub(crate) direct_depth: Option<u32>,
     /// MCMC integrators: the small-step kernel, `kelemen` (s1 = 1/1024, s2 = 1/64; Kelemen et
-    /// al. 2002), `kelemen=S1,S2` (0 < S1 < S2 <= 0.5) or `gaussian=SIGMA` with SIGMA in
-    /// (0, 10] (pbrt-v3 uses gaussian=0.01).
-    #[arg(long, value_name = "kelemen|kelemen=S1,S2|gaussian=SIGMA", default_value = "kelemen", value_parser = parse::small_step)]
+    /// al. 2002), `kelemen=S1,S2` (0 < S1 < S2 <= 0.5), `gaussian=SIGMA` with SIGMA in
+    /// (0, 10] (pbrt-v3 uses gaussian=0.01) or `uniform=A`, a box of half-width A in
+    /// (0, 0.5] (corona-13's KMLT uses uniform=0.01).
+    #[arg(long, value_name = "kelemen|kelemen=S1,S2|gaussian=SIGMA|uniform=A", default_value = "kelemen", value_parser = parse::small_step)]
     pub(crate) small_step: SmallMutation,
     /// MCMC integrators: number of Markov chains, 1..=1000000.
     #[arg(long, value_name = "N", default_value_t = 256,
@@ -140,6 +141,11 @@ pub(crate) struct MethodFlags {
     /// (central finite differences of the f32 renderer).
     #[arg(long, value_name = "dual|fd", default_value = "dual", value_parser = parse::mala_gradient)]
     pub(crate) mala_gradient: render::mlt::mala::GradientMethod,
+    /// lqmc: parameter preset, `paper` (Tessari et al. 2020: NEE paths that are neither
+    /// caustic nor out of focus splatted unexplored) or `code` (the authors' code: those NEE
+    /// paths explored with lattices of 7 points) [default: paper].
+    #[arg(long, value_name = "paper|code", value_parser = parse::lqmc_preset)]
+    pub(crate) lqmc_preset: Option<render::methods::LqmcSettings>,
 }
 
 impl MethodFlags {
@@ -255,7 +261,7 @@ impl MethodFlags {
                 s.adapt = self.adapt;
                 s.normalization = self.normalization.unwrap_or(s.normalization);
             }
-            MethodSettings::Lqmc(_) => {}
+            MethodSettings::Lqmc(s) => *s = self.lqmc_preset.unwrap_or(*s),
             _ => {}
         }
         method

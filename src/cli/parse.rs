@@ -91,20 +91,27 @@ pub(crate) fn normalization(
     }
 }
 
-/// `--small-step`: `kelemen`, `kelemen=S1,S2` or `gaussian=SIGMA`.
+/// `--small-step`: `kelemen`, `kelemen=S1,S2`, `gaussian=SIGMA` or `uniform=A`.
 pub(crate) fn small_step(text: &str) -> Result<pss::SmallMutation, String> {
     if text.eq_ignore_ascii_case("kelemen") {
         return pss::SmallMutation::kelemen(pss::KelemenParams::kelemen2002())
             .map_err(|e| e.to_string());
     }
-    let expected =
-        || format!("expected `kelemen`, `kelemen=S1,S2` or `gaussian=SIGMA`, got '{text}'");
+    let expected = || {
+        format!(
+            "expected `kelemen`, `kelemen=S1,S2`, `gaussian=SIGMA` or `uniform=A`, got '{text}'"
+        )
+    };
     if let Some(pair) = text.strip_prefix("kelemen=") {
         let (s1, s2) = pair.split_once(',').ok_or_else(expected)?;
         let s1 = s1.trim().parse::<f64>().map_err(|_| expected())?;
         let s2 = s2.trim().parse::<f64>().map_err(|_| expected())?;
         return pss::SmallMutation::kelemen(pss::KelemenParams { s1, s2 })
             .map_err(|e| e.to_string());
+    }
+    if let Some(amount) = text.strip_prefix("uniform=") {
+        let amount = amount.trim().parse::<f64>().map_err(|_| expected())?;
+        return pss::SmallMutation::uniform(amount).map_err(|e| e.to_string());
     }
     let sigma = text
         .strip_prefix("gaussian=")
@@ -253,6 +260,17 @@ pub(crate) fn mala_preset(text: &str) -> Result<mcmc_core::langevin::LangevinPar
     match text.trim().to_ascii_lowercase().as_str() {
         "paper" => Ok(LangevinParams::luan2020()),
         "code" => Ok(LangevinParams::luan2020_code()),
+        _ => Err(format!("expected paper or code, got '{text}'")),
+    }
+}
+
+/// Parses `--lqmc-preset`: `paper` (Tessari et al. 2020, NEE paths splatted unexplored) or
+/// `code` (the authors' code: NEE paths explored with `N = 7`).
+pub(crate) fn lqmc_preset(text: &str) -> Result<render::methods::LqmcSettings, String> {
+    use render::methods::LqmcSettings;
+    match text.trim().to_ascii_lowercase().as_str() {
+        "paper" => Ok(LqmcSettings::tessari2020()),
+        "code" => Ok(LqmcSettings::tessari2020_code()),
         _ => Err(format!("expected paper or code, got '{text}'")),
     }
 }

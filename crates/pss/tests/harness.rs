@@ -227,6 +227,11 @@ fn gaussian(sigma: f64) -> SmallMutation {
     SmallMutation::gaussian(sigma).unwrap()
 }
 
+/// The uniform box step (corona-13's KMLT kernel), wide enough to be seen on the coarse grids.
+fn uniform_box() -> SmallMutation {
+    SmallMutation::uniform(0.1).unwrap()
+}
+
 fn small(m: SmallMutation) -> Mh<SmallStep> {
     Mh::new(SmallStep::new(m))
 }
@@ -243,6 +248,7 @@ fn displacements(m: Option<SmallMutation>) -> (f64, f64) {
     match m {
         Some(SmallMutation::Kelemen(KelemenParams { s1, s2 })) => (0.9 * s1, 1.1 * s2),
         Some(SmallMutation::Gaussian { sigma }) => (0.01 * sigma, (3.0 * sigma).min(0.5)),
+        Some(SmallMutation::Uniform { amount }) => (1e-3 * amount, 1.1 * amount),
         None => (1e-3, 0.5),
     }
 }
@@ -526,6 +532,7 @@ fn proposals_are_symmetric_and_hastings_consistent() {
     check_proposal("Kelemen wide", &SmallStep::new(kelemen_wide()), 3);
     check_proposal("Gaussian 0.05", &SmallStep::new(gaussian(0.05)), 5);
     check_proposal("Gaussian 0.3", &SmallStep::new(gaussian(0.3)), 7);
+    check_proposal("Uniform 0.1", &SmallStep::new(uniform_box()), 13);
     check_proposal("large step", &LargeStep, 9);
     check_proposal("PSSMLT", &pssmlt_proposal(kelemen_default()), 11);
 }
@@ -583,6 +590,7 @@ fn densities_wrap_across_the_seam() {
         (5e-4, 0.15),
     );
     check_seam_densities("Gaussian 0.3", &SmallStep::new(gaussian(0.3)), (3e-3, 0.45));
+    check_seam_densities("Uniform 0.1", &SmallStep::new(uniform_box()), (1e-3, 0.099));
     check_seam_densities("large step", &LargeStep, (1e-3, 0.45));
     check_seam_densities(
         "PSSMLT",
@@ -640,6 +648,19 @@ fn gaussian_wide_passes() {
         32,
         Some(12),
         4,
+    );
+}
+
+#[test]
+fn uniform_box_passes() {
+    let m = uniform_box();
+    check_kernel(
+        "Uniform box 0.1",
+        &small(m),
+        displacements(Some(m)),
+        32,
+        Some(12),
+        13,
     );
 }
 

@@ -33,6 +33,7 @@ use render::image::Image;
 use render::integrator::lqmc::{render_lqmc, LqmcParams};
 use render::integrator::pt_driver::PtDriverSettings;
 use render::integrator::qmc::{render_qmc, render_qmc_with};
+use render::methods::{LqmcSettings, MethodSettings};
 use render::scene::Scene;
 use render::session::{render, IntegratorKind, NoProgress, RenderSettings};
 
@@ -52,13 +53,13 @@ fn critical() -> f64 {
     t_critical(ALPHA_FAMILY / N_COMPARISONS as f64, (R - 1) as u32)
 }
 
-/// LQMC exploring every contribution, NEE included (the authors' code's `N = 7` for NEE):
-/// most of the image then comes from re-traced and reconnected members.
+/// LQMC exploring every contribution, NEE included (the authors' code's `N = 7` for NEE,
+/// the named preset `LqmcSettings::tessari2020_code`): most of the image then comes from
+/// re-traced and reconnected members.
 fn explore_all() -> LqmcParams {
-    LqmcParams {
-        explore_nee: true,
-        ..LqmcParams::default()
-    }
+    let params = LqmcSettings::tessari2020_code().params;
+    assert!(params.explore_nee);
+    params
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -300,7 +301,8 @@ fn dof_scene_matches_bdpt() {
     }
 }
 
-/// Negative controls: LQMC without the suffix density in its weights (reconnections from
+/// Negative controls: LQMC with NEE explored (the authors' code's preset) without the
+/// suffix density in its weights (reconnections from
 /// `z_b` to `z_{b+1}` weighted as if their density did not depend on the prefix), and a
 /// Halton QMC render with direct light only (max depth 1), are detected on the
 /// depth-of-field scene.
@@ -324,13 +326,50 @@ fn negative_controls_fail_the_same_tests() {
     );
 }
 
+/// The NEE-explored preset explores the NEE paths the paper's rule splats unexplored: on the
+/// Cornell box, where nearly all light arrives by next-event estimation, nearly every
+/// contribution of the preset is an explored NEE path and none is an unexplored one; the
+/// paper's preset (the negative control) explores none of them. (Its convergence to BDPT is
+/// tested with the other methods; its wrong-weights control is in
+/// [`negative_controls_fail_the_same_tests`]: leaving the suffix density out fails on the
+/// depth-of-field scene. On the Cornell box that control would pass, as it must: an NEE
+/// path's static suffix is the light vertex, whose density does not depend on the prefix.)
+#[test]
+fn nee_explored_preset_explores_the_nee_paths() {
+    let (scene, _) = cornell();
+    let s = pt_settings(scene, 2, CORNELL_DEPTH, 1);
+    let cancel = AtomicBool::new(false);
+    let code = render_lqmc(scene, &s, &explore_all(), &NoProgress, &cancel);
+    let paper = render_lqmc(scene, &s, &LqmcParams::default(), &NoProgress, &cancel);
+    eprintln!(
+        "cornell: code {} explored ({} NEE), {} unexplored ({} NEE); paper {} explored, {} unexplored ({} NEE)",
+        code.explored, code.explored_nee, code.direct, code.direct_nee,
+        paper.explored, paper.direct, paper.direct_nee
+    );
+    assert!(
+        code.explored_nee > 10 * code.direct && code.direct_nee == 0,
+        "{code:?}"
+    );
+    assert!(code.explored_nee <= code.explored);
+    // Negative control: the paper's rule.
+    assert!(
+        paper.explored_nee == 0 && paper.direct_nee >= code.explored_nee,
+        "{paper:?}"
+    );
+    assert!(paper.direct_nee <= paper.direct);
+}
+
 #[test]
 fn same_seed_one_and_two_threads_are_bit_identical() {
     let scene = scene_file("cornell-glass.gltf", 40);
-    for integrator in [IntegratorKind::Qmc, IntegratorKind::Lqmc] {
+    for method in [
+        IntegratorKind::Qmc.settings(),
+        IntegratorKind::Lqmc.settings(),
+        MethodSettings::Lqmc(LqmcSettings::tessari2020_code()),
+    ] {
         let run = |threads| {
             let settings = RenderSettings {
-                method: integrator.settings(),
+                method,
                 width: 40,
                 height: 24,
                 budget: Budget::SamplesPerPixel(2),
@@ -346,11 +385,11 @@ fn same_seed_one_and_two_threads_are_bit_identical() {
                 .collect::<Vec<_>>()
         };
         let one = run(1);
-        assert!(one == run(2), "{integrator:?}: 1 and 2 threads differ");
+        assert!(one == run(2), "{method:?}: 1 and 2 threads differ");
         // Negative control: another seed changes the bits.
         let other = {
             let settings = RenderSettings {
-                method: integrator.settings(),
+                method,
                 width: 40,
                 height: 24,
                 budget: Budget::SamplesPerPixel(2),

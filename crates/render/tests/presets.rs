@@ -202,3 +202,42 @@ fn lqmc_tessari2020_pins_section_4_parameters() {
     other.n_caustic = 23;
     assert_ne!(other, p);
 }
+
+#[test]
+fn lqmc_tessari2020_code_explores_nee_with_seven_points() {
+    // The authors' code (corona-13 `lqmc.c`): NEE-classified paths explored with N = 7; the
+    // paper's rule splats them unexplored. Nothing else differs.
+    let code = LqmcSettings::tessari2020_code().params;
+    let paper = LqmcSettings::tessari2020().params;
+    assert!(code.explore_nee && code.n_nee == 7);
+    assert!(!paper.explore_nee);
+    assert_eq!(
+        render::integrator::lqmc::LqmcParams {
+            explore_nee: false,
+            ..code
+        },
+        paper
+    );
+}
+
+#[test]
+fn pssmlt_corona13_kmlt_is_kmlt_over_the_path_tracer() {
+    // corona-13 `kmlt.c`: large steps 0.2, uniform box small steps (0.01 for directions),
+    // expected-value splats, b over 2^20 samples; over the path tracer (pssmlt-pt), without
+    // roulette like LQMC's tracer, no raster steps, no direct pass.
+    let p = PssmltSettings::corona13_kmlt();
+    assert_eq!(p.base, render::methods::PathBase::Pt);
+    assert_eq!(MethodSettings::from(p).kind(), IntegratorKind::PssmltPt);
+    assert_eq!(p.chain.large_step, LargeStepMode::Fixed(0.2));
+    assert_eq!(p.chain.small_step, SmallMutation::Uniform { amount: 0.01 });
+    assert_eq!(p.chain.bootstrap_samples, 1 << 20);
+    assert!(!p.large_step_mis && p.raster.is_off());
+    assert_eq!(p.direct, DirectPass::Off);
+    assert_eq!(p.roulette.start, None);
+    // Negative control: PSSMLT/K over BDPT (the earlier pairing) is told apart.
+    assert_ne!(PssmltSettings::kelemen2002(), p);
+    assert_ne!(
+        PssmltSettings::kelemen2002().on(render::methods::PathBase::Pt),
+        p
+    );
+}

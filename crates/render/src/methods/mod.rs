@@ -55,7 +55,9 @@ pub use output::{
     PhaseTimes, RenderOutput, Unsampled, BRIGHTNESS_TARGET,
 };
 pub use pathmlt::PathMltSettings;
-pub use pssmlt::{PathBase, PssmltSettings};
+pub use pssmlt::{
+    PathBase, PssmltSettings, CORONA13_BOOTSTRAP, CORONA13_LARGE_STEP, CORONA13_SMALL_STEP,
+};
 pub use pt::{PtSettings, QmcSettings};
 pub use settings::{
     mlt_budget, remaining, validate_normalization, ChainSettings, MethodSettings, RenderSettings,

@@ -201,6 +201,11 @@ pub struct LqmcStats {
     pub explored: u64,
     /// Contributions splatted unexplored.
     pub direct: u64,
+    /// NEE-class contributions explored (the authors' code's rule,
+    /// `LqmcSettings::tessari2020_code`; part of `explored`).
+    pub explored_nee: u64,
+    /// NEE-class contributions splatted unexplored (the paper's rule; part of `direct`).
+    pub direct_nee: u64,
     /// Lattice members in their seed's class (seeds included).
     pub members: u64,
     /// Lattice members rejected (left the class).
@@ -208,13 +213,20 @@ pub struct LqmcStats {
 }
 
 impl std::fmt::Display for LqmcStats {
-    /// `N seeds, N progressions, N contributions explored (N members in class, N rejected), N
-    /// splatted directly`.
+    /// `N seeds, N progressions, N contributions explored (N of them NEE; N members in class,
+    /// N rejected), N splatted unexplored (N of them NEE)`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} seeds, {} progressions, {} contributions explored ({} members in class, {} rejected), {} splatted directly",
-            self.seeds, self.progressions, self.explored, self.members, self.rejected, self.direct
+            "{} seeds, {} progressions, {} contributions explored ({} of them NEE; {} members in class, {} rejected), {} splatted unexplored ({} of them NEE)",
+            self.seeds,
+            self.progressions,
+            self.explored,
+            self.explored_nee,
+            self.members,
+            self.rejected,
+            self.direct,
+            self.direct_nee
         )
     }
 }

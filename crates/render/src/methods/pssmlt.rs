@@ -12,11 +12,22 @@ use super::{
 use crate::bdpt::{BdptParams, Roulette};
 use crate::error::RenderError;
 use crate::mlt::direct::{self, DirectPass};
-use crate::mlt::{MltDriver, MltEstimator, MltSettings, PssmltTarget, PtTarget, PATH_STREAMS};
+use crate::mlt::{
+    LargeStepMode, MltDriver, MltEstimator, MltSettings, PssmltTarget, PtTarget, PATH_STREAMS,
+};
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use mcmc_core::render_loop::ChainAllocation;
-use pss::RasterParams;
+use pss::{RasterParams, SmallMutation};
+
+/// Large-step probability of [`PssmltSettings::corona13_kmlt`] (corona-13 `kmlt.c`).
+pub const CORONA13_LARGE_STEP: f64 = 0.2;
+/// Half-width of [`PssmltSettings::corona13_kmlt`]'s uniform small step (corona-13's
+/// direction mutation amount).
+pub const CORONA13_SMALL_STEP: f64 = 0.01;
+/// Bootstrap samples of [`PssmltSettings::corona13_kmlt`] (corona-13 estimates `b` over the
+/// first 2^20 large steps).
+pub const CORONA13_BOOTSTRAP: usize = 1 << 20;
 
 /// The path sampler PSSMLT's chains run on: what one primary sample vector means.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -125,6 +136,38 @@ impl PssmltSettings {
         Self {
             large_step_mis: true,
             ..Self::zsolnai2013()
+        }
+    }
+
+    /// The KMLT baseline of Tessari et al. 2020 as their renderer runs it (corona-13,
+    /// `kmlt.c`), over the path tracer with next-event estimation ([`PathBase::Pt`], the
+    /// unidirectional sampler LQMC's seeds come from): large steps with probability 0.2, the
+    /// expected-value estimator (no large-step MIS), a uniform box small step
+    /// `x + 0.01 (2u - 1)` on every coordinate (corona's amount for BSDF directions, which are
+    /// most of a path's numbers; corona moves the image by 0.005 and light numbers by 0.005 and
+    /// 0.001, one amount per kind of number, which [`PtTarget`]'s flat vector does not tell
+    /// apart), `b` from 2^20 independent samples (corona: a running mean over the first 2^20
+    /// large steps of each thread), no raster steps, no direct pass and no Russian roulette
+    /// (LQMC's tracer has none; corona keeps the roulette numbers of a path fixed). Corona's
+    /// forced accept after 40 000 rejections is not reproduced.
+    #[must_use]
+    pub const fn corona13_kmlt() -> Self {
+        Self {
+            base: PathBase::Pt,
+            chain: ChainSettings {
+                large_step: LargeStepMode::Fixed(CORONA13_LARGE_STEP),
+                small_step: SmallMutation::Uniform {
+                    amount: CORONA13_SMALL_STEP,
+                },
+                bootstrap_samples: CORONA13_BOOTSTRAP,
+                ..ChainSettings::kelemen2002()
+            },
+            large_step_mis: false,
+            raster: RasterParams::off(),
+            direct: DirectPass::Off,
+            direct_depth: direct::DIRECT_DEPTH_DEFAULT,
+            sampler: SamplerKind::Independent,
+            roulette: Roulette { start: None },
         }
     }
 

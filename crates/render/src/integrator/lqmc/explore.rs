@@ -44,6 +44,10 @@ pub(crate) struct ExploreStats {
     pub explored: u64,
     /// Contributions splatted directly (NEE class, too short, or too many dimensions).
     pub direct: u64,
+    /// NEE-class contributions explored (only with [`LqmcParams::explore_nee`]).
+    pub explored_nee: u64,
+    /// NEE-class contributions splatted unexplored by the paper's rule (part of `direct`).
+    pub direct_nee: u64,
     /// Lattice members rebuilt in the seed's class (seeds included).
     pub members: u64,
     /// Lattice members rejected (left the class).
@@ -180,7 +184,11 @@ impl<'a> Explorer<'a> {
         }
         let coc = self.seed_coc();
         let class = classify(&self.params, &self.rough, is_nee, coc);
-        if class == PathClass::Direct || (class == PathClass::Nee && !self.params.explore_nee) {
+        if class == PathClass::Nee && !self.params.explore_nee {
+            self.stats.direct_nee += 1;
+            return false;
+        }
+        if class == PathClass::Direct {
             return false;
         }
         breakup_weights(&self.params, &self.rough, class, &mut self.weights);
@@ -271,6 +279,7 @@ impl<'a> Explorer<'a> {
             &mut self.scratch,
         );
         self.stats.explored += 1;
+        self.stats.explored_nee += u64::from(class == PathClass::Nee);
         self.stats.members += u64::from(stats.members);
         self.stats.rejected += u64::from(stats.rejected);
         for s in &self.splats {

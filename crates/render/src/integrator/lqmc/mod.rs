@@ -149,6 +149,11 @@ pub struct LqmcOutput {
     pub explored: u64,
     /// Contributions splatted unexplored.
     pub direct: u64,
+    /// NEE-class contributions explored (only with [`LqmcParams::explore_nee`]; part of
+    /// `explored`).
+    pub explored_nee: u64,
+    /// NEE-class contributions splatted unexplored by the paper's rule (part of `direct`).
+    pub direct_nee: u64,
     /// Lattice members in their seed's class (seeds included).
     pub members: u64,
     /// Lattice members rejected (left the class).
@@ -330,6 +335,8 @@ pub fn render_lqmc(
         progressions,
         explored: totals.explored,
         direct: totals.direct,
+        explored_nee: totals.explored_nee,
+        direct_nee: totals.direct_nee,
         members: totals.members,
         rejected: totals.rejected,
         dropped_nonfinite: dropped,
@@ -342,6 +349,8 @@ fn add_stats(a: &mut ExploreStats, b: &ExploreStats) {
     a.seeds += b.seeds;
     a.explored += b.explored;
     a.direct += b.direct;
+    a.explored_nee += b.explored_nee;
+    a.direct_nee += b.direct_nee;
     a.members += b.members;
     a.rejected += b.rejected;
     a.nonfinite += b.nonfinite;
