@@ -152,6 +152,7 @@ fn settings(seed: u64, depth_budget: f64) -> MltSettings {
         streams: 1,
         stage_map: false,
         shard: render::shard::Shard::WHOLE,
+        normalization: Default::default(),
     }
 }
 
