@@ -5,6 +5,7 @@
 //! whole requested phase as the first round) does not.
 
 use std::sync::atomic::AtomicBool;
+use std::sync::{Mutex, MutexGuard};
 use std::time::Duration;
 
 use mcmc_core::controller::AutoLargeStep;
@@ -61,8 +62,18 @@ fn mlt_settings() -> MltSettings {
     }
 }
 
+/// The tests of this file run one at a time: each measures a share of a time budget, which
+/// another render on the same cores would shift (the chain plan is made at the bootstrap's
+/// rate, the chains then run slower).
+fn serial() -> MutexGuard<'static, ()> {
+    static LOCK: Mutex<()> = Mutex::new(());
+    LOCK.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 #[test]
 fn the_estimation_phase_of_a_time_budget_is_a_bounded_share() {
+    let _serial = serial();
     let scene = Scene::cornell_box(SIDE as u32, SIDE as u32);
     let targets = [PssmltTarget::new(
         &scene,
@@ -139,6 +150,7 @@ fn session_share(method: render::methods::MethodSettings) -> f64 {
 
 #[test]
 fn every_auto_integrator_reports_a_bounded_share() {
+    let _serial = serial();
     let mut pssmlt = PssmltSettings::zsolnai2013();
     pssmlt.chain.chains = CHAINS;
     let mut mmlt = MmltSettings::hachisuka2014();

@@ -186,52 +186,26 @@ where
         large_step_mis,
         ..MltEstimator::plain()
     };
+    // Each rule's kernel is its own type: one driver call per rule.
+    macro_rules! run_rule {
+        ($kernel:path) => {
+            MltDriver::new(targets, mlt_settings)
+                .estimator(estimator)
+                .run(
+                    mlt::PerChain(|slot: ChainSlot, p| {
+                        $kernel(layout, base, p, slot.target as u32)
+                    }),
+                    progress,
+                    cancel,
+                )
+        };
+    }
     match variant {
-        DrVariant::Orbital => MltDriver::new(targets, mlt_settings)
-            .estimator(estimator)
-            .run(
-                mlt::PerChain(|slot: ChainSlot, p| {
-                    dr::orbital_kernel(layout, base, p, slot.target as u32)
-                }),
-                progress,
-                cancel,
-            ),
-        DrVariant::TierneyMira => MltDriver::new(targets, mlt_settings)
-            .estimator(estimator)
-            .run(
-                mlt::PerChain(|slot: ChainSlot, p| {
-                    dr::tierney_mira_kernel(layout, base, p, slot.target as u32)
-                }),
-                progress,
-                cancel,
-            ),
-        DrVariant::GreenMira => MltDriver::new(targets, mlt_settings)
-            .estimator(estimator)
-            .run(
-                mlt::PerChain(|slot: ChainSlot, p| {
-                    dr::green_mira_kernel(layout, base, p, slot.target as u32)
-                }),
-                progress,
-                cancel,
-            ),
-        DrVariant::TierneyMiraPairwise => MltDriver::new(targets, mlt_settings)
-            .estimator(estimator)
-            .run(
-                mlt::PerChain(|slot: ChainSlot, p| {
-                    dr::pairwise_tierney_mira_kernel(layout, base, p, slot.target as u32)
-                }),
-                progress,
-                cancel,
-            ),
-        DrVariant::GreenMiraPairwise => MltDriver::new(targets, mlt_settings)
-            .estimator(estimator)
-            .run(
-                mlt::PerChain(|slot: ChainSlot, p| {
-                    dr::pairwise_green_mira_kernel(layout, base, p, slot.target as u32)
-                }),
-                progress,
-                cancel,
-            ),
+        DrVariant::Orbital => run_rule!(dr::orbital_kernel),
+        DrVariant::TierneyMira => run_rule!(dr::tierney_mira_kernel),
+        DrVariant::GreenMira => run_rule!(dr::green_mira_kernel),
+        DrVariant::TierneyMiraPairwise => run_rule!(dr::pairwise_tierney_mira_kernel),
+        DrVariant::GreenMiraPairwise => run_rule!(dr::pairwise_green_mira_kernel),
         DrVariant::CheapThenExpensive => {
             unreachable!("cheap-then-expensive runs through the Langevin driver")
         }
