@@ -196,30 +196,11 @@ fn negative_controls_missing_or_doubled_direct_light_fail() {
 /// depth 2 with its pilot, large-step MIS, raster mutation) converges to BDPT.
 #[test]
 fn the_default_balanced_pass_converges_to_bdpt() {
-    let cancel = AtomicBool::new(false);
-    let images: Vec<Image> = (0..R as u64)
-        .map(|r| {
-            let settings = RenderSettings {
-                width: SIZE,
-                height: SIZE,
-                budget: Budget::SamplesPerPixel(64),
-                threads: 2,
-                seed: 44_000 + r,
-                max_depth: DEPTH,
-                method: IntegratorKind::Pssmlt.settings().with_chains(64, 20_000),
-            };
-            let out = render(cornell(), &settings, &NoProgress, &cancel).unwrap();
-            assert!(
-                out.notes
-                    .iter()
-                    .any(|n| n.contains("balanced against the chains")),
-                "{:?}",
-                out.notes
-            );
-            assert_finite_non_negative(&out.image, "balanced pass replicate");
-            out.image
-        })
-        .collect();
+    let images = session_replicates(
+        IntegratorKind::Pssmlt.settings(),
+        44_000,
+        "balanced against the chains",
+    );
     against_reference(
         "cornell PSSMLT, session default (balanced direct pass)",
         &images,
@@ -230,8 +211,8 @@ fn the_default_balanced_pass_converges_to_bdpt() {
 }
 
 /// `R` replicates of `method` as the session renders it, at 64 mutations per pixel; every
-/// replicate's notes must report the direct pass.
-fn session_replicates(method: MethodSettings, seed0: u64) -> Vec<Image> {
+/// replicate's notes must report the direct pass and include `note`.
+fn session_replicates(method: MethodSettings, seed0: u64, note: &str) -> Vec<Image> {
     let cancel = AtomicBool::new(false);
     (0..R as u64)
         .map(|r| {
@@ -245,13 +226,13 @@ fn session_replicates(method: MethodSettings, seed0: u64) -> Vec<Image> {
                 method: method.with_chains(64, 20_000),
             };
             let out = render(cornell(), &settings, &NoProgress, &cancel).unwrap();
-            assert!(
-                out.notes
-                    .iter()
-                    .any(|n| n.contains("direct-lighting pass: depths 0-")),
-                "{:?}",
-                out.notes
-            );
+            for needle in ["direct-lighting pass: depths 0-", note] {
+                assert!(
+                    out.notes.iter().any(|n| n.contains(needle)),
+                    "{needle}: {:?}",
+                    out.notes
+                );
+            }
             assert!(out.mcmc.as_ref().unwrap().direct_pass.is_some());
             assert_finite_non_negative(&out.image, "session replicate");
             out.image
@@ -274,7 +255,7 @@ fn the_pass_before_mmlt_mala_and_pssmlt_pt_converges_to_bdpt() {
         ("pssmlt-pt", IntegratorKind::PssmltPt.settings(), 48_000),
     ];
     for (name, method, seed0) in cases {
-        let images = session_replicates(method, seed0);
+        let images = session_replicates(method, seed0, "direct-lighting pass");
         against_reference(
             &format!("cornell {name} with the direct pass"),
             &images,
