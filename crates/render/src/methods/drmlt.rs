@@ -123,7 +123,7 @@ impl Method for DrmltSettings {
                 run.cancel,
             )
         } else {
-            let layout = dr::dr_layout(common.max_depth);
+            let max_depth = common.max_depth;
             notes.push(format!(
                 "delayed rejection: {} second stage on {}{}",
                 self.variant.name(),
@@ -143,7 +143,7 @@ impl Method for DrmltSettings {
                     render_dr(
                         &targets,
                         self.variant,
-                        layout,
+                        max_depth,
                         self.on,
                         (&mlt_settings, self.large_step_mis),
                         run.progress,
@@ -155,7 +155,7 @@ impl Method for DrmltSettings {
                     render_dr(
                         &targets,
                         self.variant,
-                        layout,
+                        max_depth,
                         self.on,
                         (&mlt_settings, self.large_step_mis),
                         run.progress,
@@ -172,7 +172,7 @@ impl Method for DrmltSettings {
 fn render_dr<T>(
     targets: &[T],
     variant: DrVariant,
-    layout: pss::PairLayout,
+    max_depth: u32,
     base: DrBase,
     (mlt_settings, large_step_mis): (&MltSettings, bool),
     progress: &dyn Progress,
@@ -193,7 +193,9 @@ where
                 .estimator(estimator)
                 .run(
                     mlt::PerChain(|slot: ChainSlot, p| {
-                        $kernel(layout, base, p, slot.target as u32)
+                        let depth = slot.target as u32;
+                        let layout = dr::chain_layout(base, max_depth, depth);
+                        $kernel(layout, base, p, depth)
                     }),
                     progress,
                     cancel,

@@ -117,6 +117,39 @@ pub fn dr_layout(max_depth: u32) -> PairLayout {
     PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
 }
 
+/// Numbers per scattering vertex MMLT's subpaths read (lobe 1, direction 2; no roulette).
+const MMLT_PER_VERTEX: usize = 3;
+
+/// The coordinates the pairwise stages move on the MMLT chain of depth `depth` (the chain's
+/// target is fixed, so the layout is a per-chain constant and the stages stay symmetric):
+/// what `crate::bdpt::sample_strategy` reads for any strategy `(s, t)`, `s + t = depth + 2`.
+/// Camera stream: raster 2 + lens 2 + time 1 + 3 per vertex; light stream: light 1 +
+/// position 2 + direction 2 + 3 per vertex; at most `depth + 1` vertices each; connection
+/// stream: the strategy choice and one connection (at most 3). Sizes rounded up to even.
+/// The DR authors size their vector per MMLT depth too, `(depth + 2) * 3`. A depth-1 chain
+/// moves 28 coordinates, a depth-5 chain 52, where [`dr_layout`] moves 96 at max depth 5.
+#[must_use]
+pub fn mmlt_layout(depth: u32) -> PairLayout {
+    let d = depth.min(crate::bdpt::MAX_PATH_DEPTH) as usize;
+    let even = |n: usize| n + n % 2;
+    let subpath = even(5 + MMLT_PER_VERTEX * (d + 1));
+    let mut dims = [0usize; PATH_STREAMS];
+    dims[Stream::Camera.index()] = subpath;
+    dims[Stream::Light.index()] = subpath;
+    dims[Stream::Connection.index()] = 4;
+    PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
+}
+
+/// The layout of a chain on `base`: [`dr_layout`]`(max_depth)` on PSSMLT (one target of every
+/// depth), [`mmlt_layout`]`(depth)` on MMLT (the chain's depth).
+#[must_use]
+pub fn chain_layout(base: DrBase, max_depth: u32, depth: u32) -> PairLayout {
+    match base {
+        DrBase::Pssmlt => dr_layout(max_depth),
+        DrBase::Mmlt => mmlt_layout(depth),
+    }
+}
+
 /// The radius scale of the timid second stage (moved to [`pss::dr`]).
 pub use pss::dr::TIMID_SCALE;
 
