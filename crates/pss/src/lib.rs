@@ -29,6 +29,7 @@
 pub mod dr;
 mod error;
 mod fresh;
+mod lazy_pairs;
 pub mod langevin;
 pub mod mala;
 mod mutation;
@@ -45,6 +46,7 @@ pub mod testing;
 
 pub use error::PssError;
 pub use fresh::FreshPss;
+pub use lazy_pairs::{LazyOrbital, LazyPairParams, LazyPairwise};
 pub use mcmc_core::delayed_rejection::{WrappedCauchy, RIOUX_LAVOIE2020_RHO};
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
 pub use on_layout::{LayoutGhost, OnLayout, PairwiseMltProposal};

@@ -1,0 +1,235 @@
+//! The orbital delayed-rejection stages at the cost of what a path reads: the pairwise polar
+//! Kelemen first stage and the orbital second stage (DR paper section 4.4, Alg. 2) applied
+//! lazily, pair by pair, to the coordinates the target reads, with the unread pairs caught up
+//! exactly when first read.
+//!
+//! # The chain they define
+//!
+//! Both stages act on *every* pair `(2k, 2k + 1)` of every stream (an unbounded layout, no
+//! lone coordinates): stage 1 moves each pair by an independent polar Kelemen step `d`, the
+//! orbital stage puts each pair of `z` at `y + R(theta) (x - y) = x + d - R(theta) d`. The
+//! closed-form acceptance of eq. 11 needs `Q1(y | z) = Q1(y | x)` and a symmetric `Q2`, which
+//! hold pair by pair on this unbounded layout exactly as on a fixed one; no layout depends on
+//! the state, so nothing is asymmetric. What is lazy is only *when* a pair is computed.
+//!
+//! # Why lazy equals eager
+//!
+//! [`crate::PssState`]'s argument (deferred decisions) with two kinds of missed steps. A pair
+//! that no evaluation read since it was stored influenced no decision; given the chain's
+//! history it is the stored pair moved by the `m1` accepted first-stage steps and the `m2`
+//! accepted second-stage steps since (a fresh uniform pair after a large step): `m1` polar
+//! Kelemen steps `d` and `m2` composite steps `d - R(theta) d`, all independent. Both are
+//! translations on the torus, so their order does not matter, and the state counts them per
+//! stream ([`crate::PssState`] keeps a second stamp for the accepted orbital steps). A
+//! candidate draws the parent's pair from that law when it first reads it, logs it, and the
+//! parent absorbs it on rejection, as for the per-coordinate lazy step. The two coordinates
+//! of a pair are always computed and stored together, so they share their stamps.
+//!
+//! One more rule makes the second stage exact: a pair the rejected `y` read is *observed*
+//! (its `d` entered `pi(y)` and the first decision), so its move in `z` is not a fresh
+//! composite step but `y`'s own `d` rotated. [`LazyOrbital`] therefore computes `z` at every
+//! pair `y` read when it proposes `z` (the cost of what `y` read), and lazily elsewhere.
+//!
+//! Random numbers: one key per candidate from the chain's RNG; the pair of stream `s`
+//! starting at interleaved index `a` draws its radius, direction and rotation uniforms from
+//! `(key, a, 0..3)` ([`crate::noise`]), so `z` recomputes `y`'s `d` from `y`'s key.
+
+use mcmc_core::delayed_rejection::{Group, OrbitalWalk, WrappedCauchy};
+use mcmc_core::proposal::ConditionalProposal;
+use mcmc_core::{Proposal, Proposed};
+use rand::{Rng, RngExt};
+
+use crate::noise::uniform;
+use crate::pairwise::{torus_displacement, PairwiseKelemenParams};
+use crate::state::{Pending, PssState};
+
+/// The laws of the lazy pairwise stages: the first stage's polar Kelemen radii and the
+/// orbital stage's wrapped Cauchy angle (DR paper eq. 9-10).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LazyPairParams {
+    /// Radius bounds of the first stage.
+    pub step: PairwiseKelemenParams,
+    /// Angle law of the orbital stage.
+    pub angle: WrappedCauchy,
+}
+
+impl LazyPairParams {
+    /// The authors' values: radii `[1.9/1024, 1.9/64]`
+    /// ([`PairwiseKelemenParams::drmlt2020`]), `rho = exp(-1/4)` (section 5.1.1).
+    #[must_use]
+    pub fn rioux_lavoie2020() -> Self {
+        Self {
+            step: PairwiseKelemenParams::drmlt2020(),
+            angle: WrappedCauchy::rioux_lavoie2020(),
+        }
+    }
+
+    /// The first-stage displacement of the pair at `a` drawn from `key`: `r (cos phi,
+    /// sin phi)`, `r` log-uniform (eq. 9), `phi` uniform.
+    #[inline]
+    #[must_use]
+    pub fn step_displacement(&self, key: u64, a: u64, draw: u64) -> [f64; 2] {
+        let r = self.step.radius(uniform(key, a, draw));
+        let (sin, cos) = (std::f64::consts::TAU * uniform(key, a, draw + 1)).sin_cos();
+        [r * cos, r * sin]
+    }
+
+    /// The move `d - R(theta) d` of a pair on its orbit (eq. 10), `theta` from `u`.
+    #[inline]
+    #[must_use]
+    pub fn orbit_displacement(&self, d: [f64; 2], u: f64) -> [f64; 2] {
+        let (cos, sin) = self.angle.rotation(u);
+        [
+            d[0] - (cos * d[0] - sin * d[1]),
+            d[1] - (sin * d[0] + cos * d[1]),
+        ]
+    }
+
+    /// The sum of `first` first-stage steps and `second` composite steps drawn from `key`
+    /// for the pair at `a` (the catch-up of missed accepted steps: translations commute).
+    #[must_use]
+    pub fn missed_steps(&self, key: u64, a: u64, first: u64, second: u64) -> [f64; 2] {
+        let mut total = [0.0, 0.0];
+        for j in 0..first + second {
+            let d = self.step_displacement(key, a, 3 * j);
+            let d = if j < first {
+                d
+            } else {
+                self.orbit_displacement(d, uniform(key, a, 3 * j + 2))
+            };
+            total[0] += d[0];
+            total[1] += d[1];
+        }
+        total
+    }
+}
+
+impl Default for LazyPairParams {
+    fn default() -> Self {
+        Self::rioux_lavoie2020()
+    }
+}
+
+/// The lazy pairwise polar Kelemen first stage: the candidate is a copy of `x` with the
+/// pending [`Pending::Pairs`]; each pair the target reads is caught up and moved then (see
+/// the [module docs](self)). Symmetric.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LazyPairwise {
+    /// Radius and angle laws.
+    pub params: LazyPairParams,
+}
+
+/// The pairs of `streams` streams whose coordinates are below `len`, as groups.
+fn stored_pairs(streams: usize, len: usize) -> impl Iterator<Item = Group> {
+    (0..len)
+        .filter(move |&i| (i / streams) % 2 == 0 && i + streams < len)
+        .map(move |i| Group::Pair(i, i + streams))
+}
+
+impl Proposal<PssState> for LazyPairwise {
+    fn propose<R: Rng + ?Sized>(&self, x: &PssState, y: &mut PssState, rng: &mut R) -> Proposed {
+        y.clone_from(x);
+        y.set_pending(Pending::Pairs(self.params), rng.random());
+        Proposed::symmetric()
+    }
+
+    /// The density of the pairs stored in both states (exact for states materialised to the
+    /// same length; the kernel's orbital rule never needs it).
+    fn log_q(&self, from: &PssState, to: &PssState) -> f64 {
+        if from.streams() != to.streams() {
+            return f64::NEG_INFINITY;
+        }
+        let stage = self.params.step.stage();
+        let read = |s: &PssState, i: usize| s.raw_values()[i];
+        let log_q = stage.groups_log_q(stored_pairs(from.streams(), from.len().min(to.len())), |i| read(from, i), |i| {
+            read(to, i)
+        });
+        if log_q.is_nan() {
+            f64::NEG_INFINITY
+        } else {
+            log_q
+        }
+    }
+
+    fn is_symmetric(&self) -> bool {
+        true
+    }
+}
+
+/// The lazy orbital second stage on the streams of `stream_mask`: `z` is a copy of `x` with
+/// the pending [`Pending::Orbit`] of `y`'s key, computed at once on the pairs `y` read and
+/// lazily elsewhere (see the [module docs](self)); other streams keep `x`'s values.
+/// [`Proposed::Invalid`] unless `y` is a [`LazyPairwise`] candidate of `x`. Symmetric.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LazyOrbital {
+    /// Radius and angle laws (the first stage's radii: `z` recomputes `y`'s moves).
+    pub params: LazyPairParams,
+    /// Streams moved (bit s = stream s).
+    pub stream_mask: u8,
+}
+
+impl LazyOrbital {
+    /// The stage on the streams of `stream_mask`.
+    #[must_use]
+    pub fn new(params: LazyPairParams, stream_mask: u8) -> Self {
+        Self {
+            params,
+            stream_mask,
+        }
+    }
+}
+
+impl ConditionalProposal<PssState> for LazyOrbital {
+    fn propose<R: Rng + ?Sized>(
+        &self,
+        x: &PssState,
+        y: &PssState,
+        z: &mut PssState,
+        rng: &mut R,
+    ) -> Proposed {
+        z.clone_from(x);
+        let pending = Pending::Orbit {
+            params: self.params,
+            first_key: y.key(),
+            stream_mask: self.stream_mask,
+        };
+        z.set_pending(pending, rng.random());
+        if !matches!(y.pending(), Pending::Pairs(p) if p == self.params)
+            || y.parent_key() != x.key()
+            || y.streams() != x.streams()
+        {
+            return Proposed::Invalid { component: 0 };
+        }
+        z.materialize_read_by(y, self.stream_mask);
+        Proposed::symmetric()
+    }
+
+    /// The orbital density ([`OrbitalWalk::groups_log_q`]) of the moved pairs stored in all
+    /// three states (exact for states materialised to the same length).
+    fn log_q(&self, x: &PssState, y: &PssState, z: &PssState) -> f64 {
+        if y.streams() != x.streams() || z.streams() != x.streams() {
+            return f64::NEG_INFINITY;
+        }
+        let streams = x.streams();
+        let mask = self.stream_mask;
+        let groups = stored_pairs(streams, x.len().min(y.len()).min(z.len())).filter(move |g| match *g {
+            Group::Pair(a, _) | Group::Single(a) => mask & (1 << (a % streams)) != 0,
+        });
+        let read = |s: &PssState, i: usize| s.raw_values()[i];
+        let log_q = OrbitalWalk::torus_with(self.params.angle).groups_log_q(
+            groups,
+            |i| read(x, i),
+            |i| read(y, i),
+            |i| read(z, i),
+        );
+        // Unmoved streams must keep x's values.
+        let kept = (0..x.len().min(z.len()))
+            .filter(|&i| mask & (1 << (i % streams)) == 0)
+            .all(|i| torus_displacement(read(x, i), read(z, i)) == 0.0);
+        if log_q.is_nan() || !kept {
+            f64::NEG_INFINITY
+        } else {
+            log_q
+        }
+    }
+}
