@@ -203,7 +203,15 @@ where
         };
     }
     match variant {
-        DrVariant::Orbital => run_rule!(dr::orbital_kernel),
+        DrVariant::Orbital => MltDriver::new(targets, mlt_settings)
+            .estimator(estimator)
+            .run(
+                mlt::PerChain(|slot: ChainSlot, p| {
+                    dr::lazy_orbital_kernel(base, p, slot.target as u32)
+                }),
+                progress,
+                cancel,
+            ),
         DrVariant::TierneyMira => run_rule!(dr::tierney_mira_kernel),
         DrVariant::GreenMira => run_rule!(dr::green_mira_kernel),
         DrVariant::TierneyMiraPairwise => run_rule!(dr::pairwise_tierney_mira_kernel),

@@ -29,7 +29,8 @@ use pss::dr::{
     StageChoice,
 };
 use pss::{
-    LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseMltProposal, PssState,
+    LayoutGhost, LazyOrbital, LazyPairwise, OnLayout, Orbital, PairLayout, PairwiseKelemen,
+    PairwiseMltProposal, PssState,
 };
 
 use super::PATH_STREAMS;
@@ -45,7 +46,8 @@ pub enum DrVariant {
     /// Green & Mira 2001 with the fictional state (eq. 12-14), the authors' stages as
     /// [`DrVariant::TierneyMira`] ([`pss::dr::green_mira_kernel`]).
     GreenMira,
-    /// The pairwise orbital rule (eq. 11) — the paper's recommended variant.
+    /// The pairwise orbital rule (eq. 11) — the paper's recommended variant — with stages
+    /// that cost what a path reads ([`lazy_orbital_kernel`]).
     #[default]
     Orbital,
     /// Tierney & Mira over this crate's pairwise stages: the orbital variant's pairwise polar
@@ -231,6 +233,19 @@ pub fn orbital_kernel(
     depth: u32,
 ) -> DelayedRejection<PairwiseMltProposal, ByStrategy<OnLayout<Orbital>>> {
     pss::dr::orbital_kernel(layout, p_large, strategy_streams(base, depth))
+}
+
+/// The orbital kernel at the cost of what a path reads (`depth` as [`orbital_kernel`]):
+/// [`pss::dr::lazy_orbital_kernel`] with [`strategy_streams`]. No layout: every pair of every
+/// stream moves, computed only where BDPT reads ([`pss::LazyPairwise`]). What
+/// [`DrVariant::Orbital`] runs.
+#[must_use]
+pub fn lazy_orbital_kernel(
+    base: DrBase,
+    p_large: f64,
+    depth: u32,
+) -> DelayedRejection<PairwiseMltProposal<LazyPairwise>, ByStrategy<LazyOrbital>> {
+    pss::dr::lazy_orbital_kernel(p_large, strategy_streams(base, depth))
 }
 
 /// The authors' Tierney-Mira kernel (`depth` as [`orbital_kernel`]):
