@@ -57,7 +57,7 @@ fn drmlt_langevin(m: &MethodSettings) -> bool {
 /// The chain methods with a direct-lighting pass setting (PSSMLT over BDPT or the path
 /// tracer, MMLT, Langevin MLT).
 fn has_direct_pass(m: &MethodSettings) -> bool {
-    matches!(m, M::Pssmlt(_) | M::Mmlt(_) | M::Mala(_))
+    matches!(m, M::Pssmlt(_) | M::Mmlt(_) | M::Mala(_)) || (m.kind() == K::Drmlt && !drmlt_langevin(m))
 }
 
 /// A chain method with its direct-lighting pass on.
@@ -66,6 +66,7 @@ fn direct_pass_on(m: &MethodSettings) -> bool {
         M::Pssmlt(s) => s.direct,
         M::Mmlt(s) => s.direct.pass,
         M::Mala(s) => s.direct.pass,
+        M::Drmlt(s) if !drmlt_langevin(m) => s.direct.pass,
         _ => return false,
     };
     !matches!(pass, DirectPass::Off | DirectPass::Fixed(0))
@@ -150,7 +151,7 @@ pub(crate) const RULES: &[FlagRule] = &[
             // The all-strategy BDPT samples of the depth normalisation; MMLT's own paths have
             // a fixed length.
             M::Mmlt(s) => s.bdpt_normalization > 0,
-            M::Drmlt(s) => s.on == DrBase::Pssmlt && !drmlt_langevin(m),
+            M::Drmlt(s) => s.on != DrBase::Mmlt && !drmlt_langevin(m),
             _ => false,
         },
         also: "mmlt with --bdpt-normalization N > 0; not drmlt with --dr-on mmlt or \
@@ -267,7 +268,7 @@ mod tests {
         ("sampler", Some(["independent", "sobol"])),
         ("strategy_images", None),
         ("dr_variant", Some(["green-mira", "tierney-mira"])),
-        ("dr_on", Some(["mmlt", "pssmlt"])),
+        ("dr_on", Some(["mmlt", "pssmlt-pt"])),
         ("perturbation", Some(["lens", "multichain"])),
         ("adapt", Some(["global", "grid"])),
         ("mala_preset", Some(["paper", "code"])),
@@ -298,7 +299,9 @@ mod tests {
             "raster_mutation" => vec!["pssmlt", "pssmlt-pt", "mmlt"],
             "chain_allocation" | "strategy_strata" | "bdpt_normalization" => vec!["mmlt"],
             // mmlt's pass is off by default: giving it samples or a share turns it on.
-            "direct_samples" | "direct_share" => with(MALA, &["pssmlt", "pssmlt-pt", "mmlt"]),
+            "direct_samples" | "direct_share" => {
+                with(MALA, &["pssmlt", "pssmlt-pt", "mmlt", "drmlt"])
+            }
             "direct_depth" => with(MALA, &["pssmlt", "pssmlt-pt"]),
             // drmlt's default rule (orbital) has its own second-stage kernel.
             "small_step" => with(MALA, &["pssmlt", "pssmlt-pt", "mmlt"]),

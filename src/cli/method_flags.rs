@@ -114,7 +114,7 @@ pub(crate) struct MethodFlags {
     #[arg(long, value_name = "RULE", default_value = "orbital", value_parser = parse::dr_variant)]
     pub(crate) dr_variant: DrVariant,
     /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).
-    #[arg(long, value_name = "pssmlt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
+    #[arg(long, value_name = "pssmlt|pssmlt-pt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
     pub(crate) dr_on: DrBase,
     /// pathmlt: the perturbation mixed with the bidirectional mutation (0.5 each, RA paper
     /// section 8.1), `lens` or `multichain`.
@@ -246,6 +246,7 @@ impl MethodFlags {
                 s.mala.max_depth = self.mala_max_depth;
                 s.mala.gradient = self.mala_gradient;
                 s.roulette = self.roulette.unwrap_or(s.roulette);
+                s.direct = self.direct(s.direct);
             }
             MethodSettings::Mala(s) => {
                 s.chain = self.chain();

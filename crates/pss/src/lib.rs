@@ -49,7 +49,7 @@ pub use fresh::FreshPss;
 pub use lazy_pairs::{LazyOrbital, LazyPairParams, LazyPairwise};
 pub use mcmc_core::delayed_rejection::{WrappedCauchy, RIOUX_LAVOIE2020_RHO};
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
-pub use on_layout::{LayoutGhost, OnLayout, PairwiseMltProposal};
+pub use on_layout::{LayoutGhost, LogQPair, OnLayout, PairwiseMltProposal};
 pub use orbital::Orbital;
 pub use pairwise::{
     torus_displacement, Group, PairLayout, PairwiseKelemen, PairwiseKelemenParams,

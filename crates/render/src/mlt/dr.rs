@@ -90,6 +90,10 @@ pub enum DrBase {
     /// PSSMLT over BDPT (section 5.1.1).
     #[default]
     Pssmlt,
+    /// PSSMLT over the unidirectional path tracer with next-event estimation
+    /// ([`crate::mlt::PtTarget`]; the paper's PSSMLT results ran "atop a PSSMLT path tracer",
+    /// section 5.1.1). The second stage moves every stream, as on [`DrBase::Pssmlt`].
+    PssmltPt,
     /// Multiplexed MLT (section 5.1.2): stage 2 on the camera subpath only.
     Mmlt,
 }
@@ -142,12 +146,32 @@ pub fn mmlt_layout(depth: u32) -> PairLayout {
     PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
 }
 
-/// The layout of a chain on `base`: [`dr_layout`]`(max_depth)` on PSSMLT (one target of every
-/// depth), [`mmlt_layout`]`(depth)` on MMLT (the chain's depth).
+/// Numbers per bounce the path tracer reads (light choice 1, light position 2, lobe 1,
+/// direction 2, roulette 1: `crate::integrator::pt`).
+const PT_PER_BOUNCE: usize = 7;
+
+/// The coordinates the pairwise stages move on PSSMLT over the path tracer
+/// ([`crate::mlt::PtTarget`]): raster 2 + lens 2 + time 1 + 7 per bounce of the camera
+/// stream, for paths of at most `max_depth` bounces (plus one for the last emitter hit);
+/// rounded up to even.
+#[must_use]
+pub fn pt_layout(max_depth: u32) -> PairLayout {
+    let d = max_depth.min(crate::bdpt::MAX_PATH_DEPTH) as usize;
+    let camera = 5 + PT_PER_BOUNCE * (d + 1);
+    let mut dims = [0usize; PATH_STREAMS];
+    dims[Stream::Camera.index()] = camera + camera % 2;
+    PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
+}
+
+/// The layout of a chain on `base` (for the rules with fixed layouts; the orbital rule needs
+/// none, [`lazy_orbital_kernel`]): [`dr_layout`]`(max_depth)` on PSSMLT (one target of every
+/// depth), [`pt_layout`]`(max_depth)` over the path tracer, [`mmlt_layout`]`(depth)` on MMLT
+/// (the chain's depth).
 #[must_use]
 pub fn chain_layout(base: DrBase, max_depth: u32, depth: u32) -> PairLayout {
     match base {
         DrBase::Pssmlt => dr_layout(max_depth),
+        DrBase::PssmltPt => pt_layout(max_depth),
         DrBase::Mmlt => mmlt_layout(depth),
     }
 }
@@ -159,7 +183,7 @@ pub use pss::dr::TIMID_SCALE;
 #[must_use]
 pub fn second_stage_streams(base: DrBase) -> u8 {
     match base {
-        DrBase::Pssmlt => pss::ALL_STREAMS,
+        DrBase::Pssmlt | DrBase::PssmltPt => pss::ALL_STREAMS,
         DrBase::Mmlt => 1 << Stream::Camera.index(),
     }
 }
