@@ -178,6 +178,13 @@ pub(crate) const RULES: &[FlagRule] = &[
         also: "not with --dr-variant cheap-then-expensive (always on MMLT)",
     },
     FlagRule {
+        id: "dr_fixed_strategy",
+        applies: |m| {
+            matches!(m, M::Drmlt(s) if s.on == DrBase::Mmlt && s.variant == DrVariant::Orbital)
+        },
+        also: "drmlt with --dr-on mmlt and --dr-variant orbital",
+    },
+    FlagRule {
         id: "perturbation",
         applies: |m| m.kind() == K::PathMlt,
         also: "",
@@ -269,6 +276,7 @@ mod tests {
         ("strategy_images", None),
         ("dr_variant", Some(["green-mira", "tierney-mira"])),
         ("dr_on", Some(["mmlt", "pssmlt-pt"])),
+        ("dr_fixed_strategy", None),
         ("perturbation", Some(["lens", "multichain"])),
         ("adapt", Some(["global", "grid"])),
         ("mala_preset", Some(["paper", "code"])),
@@ -318,6 +326,8 @@ mod tests {
             "sampler" => with(MALA, &["pt", "bdpt", "pssmlt", "pssmlt-pt"]),
             "strategy_images" => vec!["bdpt"],
             "dr_variant" | "dr_on" => vec!["drmlt"],
+            // Only with --dr-on mmlt (not drmlt's default sampler).
+            "dr_fixed_strategy" => vec![],
             "perturbation" | "adapt" => vec!["pathmlt"],
             "mala_preset" | "mala_max_depth" | "mala_gradient" => MALA.to_vec(),
             "lqmc_preset" => vec!["lqmc"],
@@ -455,6 +465,20 @@ mod tests {
                 false,
             ),
             ("drmlt", &["--dr-on", "mmlt", "--roulette", "2"], false),
+            ("drmlt", &["--dr-on", "mmlt", "--dr-fixed-strategy"], true),
+            (
+                "drmlt",
+                &[
+                    "--dr-on",
+                    "mmlt",
+                    "--dr-variant",
+                    "green-mira",
+                    "--dr-fixed-strategy",
+                ],
+                false,
+            ),
+            ("drmlt", &["--dr-on", "pssmlt-pt", "--roulette", "2"], true),
+            ("drmlt", &["--direct-samples", "4", "--direct-depth", "2"], true),
             ("drmlt", &["--dr-on", "pssmlt", "--roulette", "2"], true),
             (
                 "mmlt",

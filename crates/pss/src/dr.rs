@@ -286,9 +286,21 @@ pub fn lazy_orbital_kernel<C>(
     p_large: f64,
     streams: SecondStageStreams<C>,
 ) -> DelayedRejection<PairwiseMltProposal<LazyPairwise>, ByState<LazyOrbital, C>> {
-    let params = LazyPairParams::default();
+    lazy_orbital_kernel_with(LazyPairParams::default(), p_large, streams)
+}
+
+/// [`lazy_orbital_kernel`] with the laws and kept first numbers of `params` (both stages use
+/// the same pairing: [`LazyPairParams::fixed_first`]).
+#[must_use]
+pub fn lazy_orbital_kernel_with<C>(
+    params: LazyPairParams,
+    p_large: f64,
+    streams: SecondStageStreams<C>,
+) -> DelayedRejection<PairwiseMltProposal<LazyPairwise>, ByState<LazyOrbital, C>> {
+    let first = PairwiseMltProposal::new(LazyPairwise { params }, p_large.clamp(0.0, 1.0))
+        .unwrap_or_else(|_| unreachable!("clamped"));
     let second = streams.stages(|mask| LazyOrbital::new(params, mask));
-    DelayedRejection::orbital(lazy_first_stage(p_large), second).second_stage_after_small_steps()
+    DelayedRejection::orbital(first, second).second_stage_after_small_steps()
 }
 
 /// The authors' bold first stage of Tierney-Mira and Green-Mira: a large step with

@@ -44,13 +44,37 @@ use crate::pairwise::{torus_displacement, PairwiseKelemenParams};
 use crate::state::{Pending, PssState};
 
 /// The laws of the lazy pairwise stages: the first stage's polar Kelemen radii and the
-/// orbital stage's wrapped Cauchy angle (DR paper eq. 9-10).
+/// orbital stage's wrapped Cauchy angle (DR paper eq. 9-10), and the streams whose first
+/// number no small step moves.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LazyPairParams {
     /// Radius bounds of the first stage.
     pub step: PairwiseKelemenParams,
     /// Angle law of the orbital stage.
     pub angle: WrappedCauchy,
+    /// Streams (bit s = stream s) whose number 0 is kept by both stages (renewed by large
+    /// steps only; MMLT's strategy choice, the DR paper's fixed strategy): their pairs are
+    /// `(1, 2), (3, 4), ...`. Exact: a fixed partition into pairs and kept coordinates (a
+    /// kept coordinate is its own reverse move in both stages). Default 0.
+    pub fixed_first: u8,
+}
+
+impl LazyPairParams {
+    /// The interleaved indices of the pair holding coordinate `index` of a state with
+    /// `streams` streams, or `None` for a kept first number ([`LazyPairParams::fixed_first`]).
+    #[inline]
+    #[must_use]
+    pub fn pair_of(&self, index: usize, streams: usize) -> Option<[usize; 2]> {
+        let stream = index % streams;
+        let offset = usize::from(self.fixed_first & (1 << stream) != 0);
+        let k = index / streams;
+        if k < offset {
+            return None;
+        }
+        let first = ((k - offset) & !1) + offset;
+        let a = stream + streams * first;
+        Some([a, a + streams])
+    }
 }
 
 impl LazyPairParams {
@@ -61,7 +85,15 @@ impl LazyPairParams {
         Self {
             step: PairwiseKelemenParams::drmlt2020(),
             angle: WrappedCauchy::rioux_lavoie2020(),
+            fixed_first: 0,
         }
+    }
+
+    /// The same laws keeping the first number of the streams of `streams`.
+    #[must_use]
+    pub const fn with_fixed_first(mut self, streams: u8) -> Self {
+        self.fixed_first = streams;
+        self
     }
 
     /// The first-stage displacement of the pair at `a` drawn from `key`: `r (cos phi,
@@ -120,10 +152,15 @@ pub struct LazyPairwise {
 }
 
 /// The pairs of `streams` streams whose coordinates are below `len`, as groups.
-fn stored_pairs(streams: usize, len: usize) -> impl Iterator<Item = Group> {
-    (0..len)
-        .filter(move |&i| (i / streams) % 2 == 0 && i + streams < len)
-        .map(move |i| Group::Pair(i, i + streams))
+fn stored_pairs(
+    params: LazyPairParams,
+    streams: usize,
+    len: usize,
+) -> impl Iterator<Item = Group> {
+    (0..len).filter_map(move |i| match params.pair_of(i, streams) {
+        Some([a, b]) if a == i && b < len => Some(Group::Pair(a, b)),
+        _ => None,
+    })
 }
 
 impl Proposal<PssState> for LazyPairwise {
@@ -141,7 +178,7 @@ impl Proposal<PssState> for LazyPairwise {
         }
         let stage = self.params.step.stage();
         let read = |s: &PssState, i: usize| s.raw_values()[i];
-        let log_q = stage.groups_log_q(stored_pairs(from.streams(), from.len().min(to.len())), |i| read(from, i), |i| {
+        let log_q = stage.groups_log_q(stored_pairs(self.params, from.streams(), from.len().min(to.len())), |i| read(from, i), |i| {
             read(to, i)
         });
         if log_q.is_nan() {
@@ -212,7 +249,7 @@ impl ConditionalProposal<PssState> for LazyOrbital {
         }
         let streams = x.streams();
         let mask = self.stream_mask;
-        let groups = stored_pairs(streams, x.len().min(y.len()).min(z.len())).filter(move |g| match *g {
+        let groups = stored_pairs(self.params, streams, x.len().min(y.len()).min(z.len())).filter(move |g| match *g {
             Group::Pair(a, _) | Group::Single(a) => mask & (1 << (a % streams)) != 0,
         });
         let read = |s: &PssState, i: usize| s.raw_values()[i];

@@ -478,12 +478,6 @@ impl PssState {
     fn catch_up_pair(&mut self, index: usize) -> f64 {
         let streams = self.streams;
         let stream = index % streams;
-        let a = stream + streams * ((index / streams) & !1);
-        let pair = [a, a + streams];
-        if pair[1] >= self.values.len() {
-            self.values.resize(pair[1] + 1, 0.0);
-            self.stamps.resize(pair[1] + 1, NEVER);
-        }
         let (params, moved) = match self.pending {
             Pending::Pairs(params) => (params, true),
             Pending::Orbit {
@@ -495,6 +489,25 @@ impl PssState {
         };
         let now = self.iteration[stream];
         let parent_now = now - u64::from(moved);
+        let Some(pair) = params.pair_of(index, streams) else {
+            // A kept first number: only large steps renew it.
+            let stamp = self.stamps[index];
+            let value = if stamp == NEVER || stamp < self.last_large[stream] {
+                let k = mcmc_core::seed::mix64(self.key ^ CATCH_UP_SALT);
+                let v = uniform(k, index as u64, u64::MAX);
+                self.observed.push((index, v));
+                v
+            } else {
+                self.values[index]
+            };
+            self.store(index, value);
+            return value;
+        };
+        let a = pair[0];
+        if pair[1] >= self.values.len() {
+            self.values.resize(pair[1] + 1, 0.0);
+            self.stamps.resize(pair[1] + 1, NEVER);
+        }
         let orbit_step = moved && matches!(self.pending, Pending::Orbit { .. });
         let parent_orbits = self.orbits[stream] - u64::from(orbit_step);
         let catch_up_key = mcmc_core::seed::mix64(self.key ^ CATCH_UP_SALT);

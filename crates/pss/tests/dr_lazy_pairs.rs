@@ -26,9 +26,9 @@
 use mcmc_core::proposal::ConditionalProposal;
 use mcmc_core::testing::{sidak_alpha, ChiSquareReport, StationarityParams};
 use mcmc_core::{DelayedRejection, Kernel, Proposal, Proposed};
-use pss::dr::{lazy_orbital_kernel, SecondStageStreams};
+use pss::dr::{lazy_orbital_kernel, lazy_orbital_kernel_with, SecondStageStreams};
 use pss::testing::{pss_stationarity_test, ExactPssTarget, RoulettePath, Stripes};
-use pss::{OnLayout, Orbital, PairLayout, PairwiseKelemen, PssState};
+use pss::{LazyPairParams, OnLayout, Orbital, PairLayout, PairwiseKelemen, PssState};
 use rand::Rng;
 
 /// Independent exact starts per test.
@@ -36,7 +36,7 @@ const STARTS: usize = 200_000;
 /// Steps per start.
 const STEPS: u64 = 20;
 /// Tests in this file that must pass.
-const PASSING_TESTS: usize = 2;
+const PASSING_TESTS: usize = 3;
 
 fn check<T, K>(what: &str, target: &T, kernel: &K, seed: u64) -> ChiSquareReport
 where
@@ -61,6 +61,17 @@ fn lazy_orbital_keeps_pi_on_a_variable_length_path() {
     let kernel = lazy_orbital_kernel(0.1, SecondStageStreams::all());
     check("lazy orbital, roulette path", &RoulettePath::default(), &kernel, 2)
         .assert_passes("lazy orbital on a roulette path", PASSING_TESTS);
+}
+
+/// The first number kept by both stages (MMLT's fixed strategy,
+/// `LazyPairParams::fixed_first`): `u_0`, which decides whether the path continues, is
+/// renewed by large steps only, the others pair up as `(1, 2), (3, 4), ...`.
+#[test]
+fn lazy_orbital_with_a_kept_first_number_keeps_pi() {
+    let params = LazyPairParams::default().with_fixed_first(1);
+    let kernel = lazy_orbital_kernel_with(params, 0.3, SecondStageStreams::all());
+    check("lazy orbital, kept u0, roulette path", &RoulettePath::default(), &kernel, 4)
+        .assert_passes("lazy orbital with a kept first number", PASSING_TESTS);
 }
 
 /// The layout of what `x` read in its last evaluation (stream 0, rounded up to pairs).

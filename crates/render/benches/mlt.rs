@@ -255,13 +255,13 @@ fn dr_step_cost(c: &mut Criterion) {
         let group = format!("dr_step_cost_{}", name.replace('-', "_"));
         let pssmlt = PssmltTarget::new(&scene, params, SIZE, SIZE);
         bench_chain_in(c, &group, "pssmlt_kelemen", &pssmlt, kernel());
-        let dr = render::mlt::dr::lazy_orbital_kernel(DrBase::Pssmlt, 0.3, 0);
+        let dr = render::mlt::dr::lazy_orbital_kernel(DrBase::Pssmlt, 0.3, 0, false);
         bench_chain_in(c, &group, "pssmlt_dr_orbital", &pssmlt, dr);
         let mmlt = MmltTarget::all_depths(&scene, params, SIZE, SIZE);
         for depth in [2u32, 4] {
             let target = &mmlt[depth as usize];
             bench_chain_in(c, &group, &format!("mmlt{depth}_kelemen"), target, kernel());
-            let dr = render::mlt::dr::lazy_orbital_kernel(DrBase::Mmlt, 0.3, depth);
+            let dr = render::mlt::dr::lazy_orbital_kernel(DrBase::Mmlt, 0.3, depth, false);
             bench_chain_in(c, &group, &format!("mmlt{depth}_dr_orbital"), target, dr);
         }
     }

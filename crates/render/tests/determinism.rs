@@ -206,8 +206,9 @@ fn gltf_scene_with_glass_is_deterministic() {
 }
 
 /// Delayed rejection over the path tracer (`--dr-on pssmlt-pt`, orbital and the authors'
-/// Tierney-Mira) and with the direct pass (orbital on PSSMLT-PT and on MMLT): 1 and 2 threads
-/// give the same image, another seed another.
+/// Tierney-Mira), with the direct pass (orbital on PSSMLT-PT and on MMLT) and with MMLT's
+/// strategy fixed along the chain: 1 and 2 threads give the same image, another seed
+/// another.
 #[test]
 fn drmlt_over_the_path_tracer_and_with_the_direct_pass_is_bit_identical() {
     use render::methods::direct_pass::DirectSettings;
@@ -218,10 +219,13 @@ fn drmlt_over_the_path_tracer_and_with_the_direct_pass_is_bit_identical() {
         (DrVariant::TierneyMira, DrBase::PssmltPt, DirectSettings::OFF),
         (DrVariant::Orbital, DrBase::PssmltPt, DirectSettings::balanced(1)),
         (DrVariant::Orbital, DrBase::Mmlt, DirectSettings::balanced(1)),
+        (DrVariant::Orbital, DrBase::Mmlt, DirectSettings::OFF),
     ] {
         let with = |threads, seed| {
             let method = DrmltSettings {
                 direct,
+                // The last row: MMLT's strategy fixed along the chain.
+                fixed_strategy: base == DrBase::Mmlt && direct == DirectSettings::OFF,
                 ..DrmltSettings::rioux_lavoie2020_with(variant, base)
             };
             with_method(method.into(), 24, 16, threads, seed)

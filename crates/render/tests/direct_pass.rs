@@ -45,10 +45,10 @@ const BLOCKS: usize = 4;
 /// The positive cases, one per sampler and the session default, the session defaults of
 /// the chain methods that share the pass (MMLT with its pass on, `mala`, `pssmlt-pt`), and
 /// delayed rejection (orbital over the path tracer without and with the pass, orbital on
-/// MMLT and the authors' Tierney-Mira over the path tracer with the pass): image mean and
-/// blocks. (The negative controls are expected to exceed the same critical value;
+/// MMLT and the authors' Tierney-Mira over the path tracer with the pass, orbital on MMLT
+/// with the strategy fixed along the chain): image mean and blocks. (The negative controls are expected to exceed the same critical value;
 /// they are not null-hypothesis comparisons.)
-const N_COMPARISONS: usize = 10 * (1 + BLOCKS * BLOCKS);
+const N_COMPARISONS: usize = 11 * (1 + BLOCKS * BLOCKS);
 const SIZE: u32 = 16;
 const DEPTH: u32 = 5;
 const PASS: DirectPass = DirectPass::Fixed(16);
@@ -319,6 +319,24 @@ fn drmlt_over_the_path_tracer_and_with_the_pass_converges_to_bdpt() {
         let images = session_replicates_with(method, seed0, note);
         against_reference(name, &images, reference(), BLOCKS, critical());
     }
+}
+
+/// Delayed rejection on MMLT with the strategy fixed along the chain in both stages (the
+/// paper's chain, `DrmltSettings::fixed_strategy`) converges to BDPT.
+#[test]
+fn drmlt_with_the_strategy_fixed_along_the_chain_converges_to_bdpt() {
+    let method = MethodSettings::from(DrmltSettings {
+        fixed_strategy: true,
+        ..DrmltSettings::rioux_lavoie2020_with(DrVariant::Orbital, DrBase::Mmlt)
+    });
+    let images = session_replicates_with(method, 54_000, None);
+    against_reference(
+        "drmlt orbital on mmlt, strategy fixed along the chain",
+        &images,
+        reference(),
+        BLOCKS,
+        critical(),
+    );
 }
 
 /// Negative control for the MMLT split: chains over depths 2..=5 only

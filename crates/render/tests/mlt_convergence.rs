@@ -168,7 +168,7 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             let base = DrBase::Pssmlt;
             match variant {
                 DrVariant::Orbital => MltDriver::new(&targets, settings).run(
-                    |p| dr::lazy_orbital_kernel(base, p, 0),
+                    |p| dr::lazy_orbital_kernel(base, p, 0, false),
                     &NoProgress,
                     &cancel,
                 ),
@@ -226,7 +226,7 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
                     ..MltEstimator::plain()
                 })
                 .run(
-                    |p| dr::lazy_orbital_kernel(DrBase::Pssmlt, p, 0),
+                    |p| dr::lazy_orbital_kernel(DrBase::Pssmlt, p, 0, false),
                     &NoProgress,
                     &cancel,
                 )
@@ -234,7 +234,7 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
         Method::DrMmlt => {
             MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings).run(
                 PerChain(|slot: ChainSlot, p| {
-                    dr::lazy_orbital_kernel(DrBase::Mmlt, p, slot.target as u32)
+                    dr::lazy_orbital_kernel(DrBase::Mmlt, p, slot.target as u32, false)
                 }),
                 &NoProgress,
                 &cancel,

@@ -51,6 +51,10 @@ pub struct DrmltSettings {
     /// ones (the authors' runs: `directSamples` 16). Default off. Not with
     /// cheap-then-expensive.
     pub direct: DirectSettings,
+    /// On MMLT, keep the strategy along the chain in both stages (the paper's chain, section
+    /// 5.1.2; large steps still draw it afresh): [`dr::lazy_orbital_kernel`]. Orbital rule
+    /// only. Default off (the first stage then moves the strategy number too).
+    pub fixed_strategy: bool,
 }
 
 impl Default for DrmltSettings {
@@ -82,6 +86,7 @@ impl DrmltSettings {
             roulette: Roulette { start: Some(3) },
             large_step_mis: false,
             direct: DirectSettings::OFF,
+            fixed_strategy: false,
         }
     }
 }
@@ -105,6 +110,13 @@ impl Method for DrmltSettings {
                 "direct-samples/direct-share",
                 "a direct pass with --dr-variant cheap-then-expensive",
                 "no direct pass for cheap-then-expensive (any for the other drmlt variants)",
+            ));
+        }
+        if self.fixed_strategy && (self.variant != DrVariant::Orbital || self.on != DrBase::Mmlt) {
+            return Err(RenderError::setting(
+                "dr-fixed-strategy",
+                "on without --dr-variant orbital --dr-on mmlt",
+                "on only with the orbital rule on MMLT",
             ));
         }
         self.chain.validate()
@@ -172,6 +184,9 @@ impl DrmltSettings {
             match self.on {
                 DrBase::Pssmlt => "PSSMLT",
                 DrBase::PssmltPt => "PSSMLT over the path tracer",
+                DrBase::Mmlt if self.fixed_strategy => {
+                    "MMLT (camera subpath only; strategy fixed along the chain)"
+                }
                 DrBase::Mmlt => "MMLT (camera subpath only)",
             },
             if self.large_step_mis {
@@ -185,6 +200,7 @@ impl DrmltSettings {
             base: self.on,
             max_depth: common.max_depth,
             first_depth: 0,
+            fixed_strategy: self.fixed_strategy,
         };
         let settings = (&mlt_settings, self.large_step_mis);
         let out = match self.on {
@@ -224,6 +240,7 @@ struct DrRun {
     base: DrBase,
     max_depth: u32,
     first_depth: u32,
+    fixed_strategy: bool,
 }
 
 /// Delayed-rejection MLT over `targets` with the kernel of `variant` ([`crate::mlt::dr`]).
@@ -234,6 +251,7 @@ fn render_dr<T>(
         base,
         max_depth,
         first_depth,
+        fixed_strategy,
     }: DrRun,
     (mlt_settings, large_step_mis): (&MltSettings, bool),
     progress: &dyn Progress,
@@ -270,7 +288,7 @@ where
             .first_depth(first_depth)
             .run(
                 mlt::PerChain(|slot: ChainSlot, p| {
-                    dr::lazy_orbital_kernel(base, p, first_depth + slot.target as u32)
+                    dr::lazy_orbital_kernel(base, p, first_depth + slot.target as u32, fixed_strategy)
                 }),
                 progress,
                 cancel,

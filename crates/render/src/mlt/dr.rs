@@ -29,7 +29,7 @@ use pss::dr::{
     StageChoice,
 };
 use pss::{
-    LayoutGhost, LazyOrbital, LazyPairwise, OnLayout, Orbital, PairLayout, PairwiseKelemen,
+    LayoutGhost, LazyOrbital, LazyPairParams, LazyPairwise, OnLayout, Orbital, PairLayout, PairwiseKelemen,
     PairwiseMltProposal, PssState,
 };
 
@@ -261,15 +261,31 @@ pub fn orbital_kernel(
 
 /// The orbital kernel at the cost of what a path reads (`depth` as [`orbital_kernel`]):
 /// [`pss::dr::lazy_orbital_kernel`] with [`strategy_streams`]. No layout: every pair of every
-/// stream moves, computed only where BDPT reads ([`pss::LazyPairwise`]). What
+/// stream moves, computed only where the path sampler reads ([`pss::LazyPairwise`]). What
 /// [`DrVariant::Orbital`] runs.
+///
+/// With `fixed_strategy` on MMLT, the paper's chain (section 5.1.2; the authors' code mutates
+/// the strategy number with the identity kernel): neither stage moves MMLT's strategy
+/// choice, the first number of the connection stream ([`LazyPairParams::fixed_first`]);
+/// large steps draw it afresh with everything else (the authors' large step resamples the
+/// whole state). Exact: keeping a coordinate is its own reverse move in both stages, the
+/// kept coordinate is fixed per stream (not per state), so the rest pairs up the same way
+/// from every state, and eq. 11's `Q1(y | z) = Q1(y | x)` holds pair by pair as before; the
+/// second stage's light-tracing choice reads the kept number, as it already must.
 #[must_use]
 pub fn lazy_orbital_kernel(
     base: DrBase,
     p_large: f64,
     depth: u32,
+    fixed_strategy: bool,
 ) -> DelayedRejection<PairwiseMltProposal<LazyPairwise>, ByStrategy<LazyOrbital>> {
-    pss::dr::lazy_orbital_kernel(p_large, strategy_streams(base, depth))
+    let fixed = if fixed_strategy && base == DrBase::Mmlt {
+        1 << Stream::Connection.index()
+    } else {
+        0
+    };
+    let params = LazyPairParams::default().with_fixed_first(fixed);
+    pss::dr::lazy_orbital_kernel_with(params, p_large, strategy_streams(base, depth))
 }
 
 /// The authors' Tierney-Mira kernel (`depth` as [`orbital_kernel`]):
