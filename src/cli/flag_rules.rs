@@ -57,7 +57,8 @@ fn drmlt_langevin(m: &MethodSettings) -> bool {
 /// The chain methods with a direct-lighting pass setting (PSSMLT over BDPT or the path
 /// tracer, MMLT, Langevin MLT).
 fn has_direct_pass(m: &MethodSettings) -> bool {
-    matches!(m, M::Pssmlt(_) | M::Mmlt(_) | M::Mala(_)) || (m.kind() == K::Drmlt && !drmlt_langevin(m))
+    matches!(m, M::Pssmlt(_) | M::Mmlt(_) | M::Mala(_))
+        || (m.kind() == K::Drmlt && !drmlt_langevin(m))
 }
 
 /// A chain method with its direct-lighting pass on.
@@ -179,9 +180,7 @@ pub(crate) const RULES: &[FlagRule] = &[
     },
     FlagRule {
         id: "dr_fixed_strategy",
-        applies: |m| {
-            matches!(m, M::Drmlt(s) if s.on == DrBase::Mmlt && s.variant == DrVariant::Orbital)
-        },
+        applies: |m| matches!(m, M::Drmlt(s) if s.on == DrBase::Mmlt && s.variant == DrVariant::Orbital),
         also: "drmlt with --dr-on mmlt and --dr-variant orbital",
     },
     FlagRule {
@@ -478,7 +477,11 @@ mod tests {
                 false,
             ),
             ("drmlt", &["--dr-on", "pssmlt-pt", "--roulette", "2"], true),
-            ("drmlt", &["--direct-samples", "4", "--direct-depth", "2"], true),
+            (
+                "drmlt",
+                &["--direct-samples", "4", "--direct-depth", "2"],
+                true,
+            ),
             ("drmlt", &["--dr-on", "pssmlt", "--roulette", "2"], true),
             (
                 "mmlt",

@@ -152,11 +152,7 @@ pub struct LazyPairwise {
 }
 
 /// The pairs of `streams` streams whose coordinates are below `len`, as groups.
-fn stored_pairs(
-    params: LazyPairParams,
-    streams: usize,
-    len: usize,
-) -> impl Iterator<Item = Group> {
+fn stored_pairs(params: LazyPairParams, streams: usize, len: usize) -> impl Iterator<Item = Group> {
     (0..len).filter_map(move |i| match params.pair_of(i, streams) {
         Some([a, b]) if a == i && b < len => Some(Group::Pair(a, b)),
         _ => None,
@@ -178,9 +174,11 @@ impl Proposal<PssState> for LazyPairwise {
         }
         let stage = self.params.step.stage();
         let read = |s: &PssState, i: usize| s.raw_values()[i];
-        let log_q = stage.groups_log_q(stored_pairs(self.params, from.streams(), from.len().min(to.len())), |i| read(from, i), |i| {
-            read(to, i)
-        });
+        let log_q = stage.groups_log_q(
+            stored_pairs(self.params, from.streams(), from.len().min(to.len())),
+            |i| read(from, i),
+            |i| read(to, i),
+        );
         if log_q.is_nan() {
             f64::NEG_INFINITY
         } else {
@@ -249,9 +247,11 @@ impl ConditionalProposal<PssState> for LazyOrbital {
         }
         let streams = x.streams();
         let mask = self.stream_mask;
-        let groups = stored_pairs(self.params, streams, x.len().min(y.len()).min(z.len())).filter(move |g| match *g {
-            Group::Pair(a, _) | Group::Single(a) => mask & (1 << (a % streams)) != 0,
-        });
+        let groups = stored_pairs(self.params, streams, x.len().min(y.len()).min(z.len())).filter(
+            move |g| match *g {
+                Group::Pair(a, _) | Group::Single(a) => mask & (1 << (a % streams)) != 0,
+            },
+        );
         let read = |s: &PssState, i: usize| s.raw_values()[i];
         let log_q = OrbitalWalk::torus_with(self.params.angle).groups_log_q(
             groups,

@@ -29,8 +29,8 @@
 pub mod dr;
 mod error;
 mod fresh;
-mod lazy_pairs;
 pub mod langevin;
+pub mod lazy_pairs;
 pub mod mala;
 mod mutation;
 pub mod noise;

@@ -6,10 +6,10 @@ use mcmc_core::proposal::ConditionalProposal;
 use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
+use crate::lazy_pairs::LazyPairwise;
 use crate::orbital::Orbital;
 use crate::pairwise::{torus_displacement, Group, PairLayout, PairwiseKelemen};
 use crate::proposal::{LargeStep, ALL_STREAMS};
-use crate::lazy_pairs::LazyPairwise;
 use crate::state::{Pending, PssState};
 use crate::{KelemenParams, PssError, SmallMutation};
 

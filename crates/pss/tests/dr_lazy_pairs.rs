@@ -43,8 +43,11 @@ where
     T: ExactPssTarget,
     K: Kernel<T> + Clone,
 {
-    let report =
-        pss_stationarity_test(target, kernel, &StationarityParams::new(STARTS, STEPS, seed));
+    let report = pss_stationarity_test(
+        target,
+        kernel,
+        &StationarityParams::new(STARTS, STEPS, seed),
+    );
     eprintln!("{what}: {report}");
     report
 }
@@ -59,8 +62,13 @@ fn lazy_orbital_keeps_pi_on_stripes() {
 #[test]
 fn lazy_orbital_keeps_pi_on_a_variable_length_path() {
     let kernel = lazy_orbital_kernel(0.1, SecondStageStreams::all());
-    check("lazy orbital, roulette path", &RoulettePath::default(), &kernel, 2)
-        .assert_passes("lazy orbital on a roulette path", PASSING_TESTS);
+    check(
+        "lazy orbital, roulette path",
+        &RoulettePath::default(),
+        &kernel,
+        2,
+    )
+    .assert_passes("lazy orbital on a roulette path", PASSING_TESTS);
 }
 
 /// The first number kept by both stages (MMLT's fixed strategy,
@@ -70,8 +78,13 @@ fn lazy_orbital_keeps_pi_on_a_variable_length_path() {
 fn lazy_orbital_with_a_kept_first_number_keeps_pi() {
     let params = LazyPairParams::default().with_fixed_first(1);
     let kernel = lazy_orbital_kernel_with(params, 0.3, SecondStageStreams::all());
-    check("lazy orbital, kept u0, roulette path", &RoulettePath::default(), &kernel, 4)
-        .assert_passes("lazy orbital with a kept first number", PASSING_TESTS);
+    check(
+        "lazy orbital, kept u0, roulette path",
+        &RoulettePath::default(),
+        &kernel,
+        4,
+    )
+    .assert_passes("lazy orbital with a kept first number", PASSING_TESTS);
 }
 
 /// The layout of what `x` read in its last evaluation (stream 0, rounded up to pairs).

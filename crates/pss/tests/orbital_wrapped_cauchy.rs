@@ -157,7 +157,10 @@ fn rotation_sampler_has_the_quantile_law() {
         23,
     );
     let (_, p) = ks_one_sample(&wrong, |t| wc.cdf(t));
-    assert!(p < OVERWHELMING, "KS misses the reciprocal concentration: p = {p}");
+    assert!(
+        p < OVERWHELMING,
+        "KS misses the reciprocal concentration: p = {p}"
+    );
     let r = chi_square_two_sample(&bin(&wrong), &bin(&quantile), 5.0);
     report("negative control: tangent scaled by k, two-sample", &r);
     assert!(r.p_value < OVERWHELMING, "{r}");

@@ -216,9 +216,21 @@ fn drmlt_over_the_path_tracer_and_with_the_direct_pass_is_bit_identical() {
     let scene = Scene::cornell_box(24, 16);
     for (variant, base, direct) in [
         (DrVariant::Orbital, DrBase::PssmltPt, DirectSettings::OFF),
-        (DrVariant::TierneyMira, DrBase::PssmltPt, DirectSettings::OFF),
-        (DrVariant::Orbital, DrBase::PssmltPt, DirectSettings::balanced(1)),
-        (DrVariant::Orbital, DrBase::Mmlt, DirectSettings::balanced(1)),
+        (
+            DrVariant::TierneyMira,
+            DrBase::PssmltPt,
+            DirectSettings::OFF,
+        ),
+        (
+            DrVariant::Orbital,
+            DrBase::PssmltPt,
+            DirectSettings::balanced(1),
+        ),
+        (
+            DrVariant::Orbital,
+            DrBase::Mmlt,
+            DirectSettings::balanced(1),
+        ),
         (DrVariant::Orbital, DrBase::Mmlt, DirectSettings::OFF),
     ] {
         let with = |threads, seed| {

@@ -28,8 +28,8 @@ use render::bdpt::BdptParams;
 use render::image::Image;
 use render::methods::direct_pass::DirectSettings;
 use render::methods::{DrmltSettings, MethodSettings, MmltSettings};
-use render::mlt::dr::{DrBase, DrVariant};
 use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_DEPTH_DEFAULT};
+use render::mlt::dr::{DrBase, DrVariant};
 use render::mlt::{
     LargeStepMode, MltBudget, MltDriver, MltEstimator, MltSettings, MmltTarget, PssmltTarget,
     PATH_STREAMS,

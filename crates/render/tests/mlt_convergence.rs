@@ -231,15 +231,14 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
                     &cancel,
                 )
         }
-        Method::DrMmlt => {
-            MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings).run(
+        Method::DrMmlt => MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings)
+            .run(
                 PerChain(|slot: ChainSlot, p| {
                     dr::lazy_orbital_kernel(DrBase::Mmlt, p, slot.target as u32, false)
                 }),
                 &NoProgress,
                 &cancel,
-            )
-        }
+            ),
     }
 }
 

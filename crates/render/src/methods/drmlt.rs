@@ -11,14 +11,14 @@ use mcmc_core::{Progress, Target};
 use super::direct_pass::{self, DirectSettings};
 use super::mala::mala_note;
 use super::{
-    bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, ChainSettings,
-    IntegratorKind, Method, RenderOutput, RenderSettings, Run,
+    bdpt_params, depth_note, emitter_notes, mcmc_output, remaining, ChainSettings, IntegratorKind,
+    Method, RenderOutput, RenderSettings, Run,
 };
 use crate::bdpt::Roulette;
 use crate::error::RenderError;
+use crate::mlt::direct::DirectPass;
 use crate::mlt::dr::{self, DrBase, DrVariant};
 use crate::mlt::mala::{self, MalaConfig};
-use crate::mlt::direct::DirectPass;
 use crate::mlt::{
     self, MltDriver, MltEstimator, MltOutput, MltSettings, MmltTarget, PssmltTarget, PtTarget,
     PATH_STREAMS,
@@ -288,7 +288,12 @@ where
             .first_depth(first_depth)
             .run(
                 mlt::PerChain(|slot: ChainSlot, p| {
-                    dr::lazy_orbital_kernel(base, p, first_depth + slot.target as u32, fixed_strategy)
+                    dr::lazy_orbital_kernel(
+                        base,
+                        p,
+                        first_depth + slot.target as u32,
+                        fixed_strategy,
+                    )
                 }),
                 progress,
                 cancel,

@@ -29,8 +29,8 @@ use pss::dr::{
     StageChoice,
 };
 use pss::{
-    LayoutGhost, LazyOrbital, LazyPairParams, LazyPairwise, OnLayout, Orbital, PairLayout, PairwiseKelemen,
-    PairwiseMltProposal, PssState,
+    LayoutGhost, LazyOrbital, LazyPairParams, LazyPairwise, OnLayout, Orbital, PairLayout,
+    PairwiseKelemen, PairwiseMltProposal, PssState,
 };
 
 use super::PATH_STREAMS;
