@@ -48,6 +48,11 @@ struct Args {
     /// The calibration and the DR methods' acceptance per stage from one 16-mpp render each.
     #[arg(long)]
     stats_only: bool,
+    /// Step cost only: DR orbital against one-stage Kelemen on the same base (PSSMLT over
+    /// BDPT, PSSMLT over the path tracer, MMLT), no calibration, no toy; the table's
+    /// samples/s give the ratios.
+    #[arg(long)]
+    step_cost: bool,
 }
 
 /// `preset` at max depth 5.
@@ -91,6 +96,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if args.stats_only {
         (plan.regime, plan.seeds, plan.report) = (Regime::EqualSamples(16), vec![7], false);
+    }
+    if args.step_cost {
+        return step_cost(plan);
     }
     let cases = experiments::load_bundled(&plan.scenes, plan.size);
     let mut probe = at_depth_5(MethodSettings::default());
@@ -136,6 +144,48 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let calibration = fits.table("PSSMLT/G sigma").to_markdown();
     let extra = format!("## PSSMLT/G: sigma matched to DR orbital's acceptance on PSSMLT (16 mpp, seed 7)\n\n{calibration}{toy}");
     results.write_with(&tables[usize::from(args.stats_only)..], &extra)?;
+    Ok(())
+}
+
+/// `--step-cost`: DR orbital and one-stage Kelemen (PSSMLT/K's small step, large steps 0.3,
+/// plain estimator, no direct pass) on each base, interleaved per seed.
+fn step_cost(plan: experiments::Plan) -> Result<(), Box<dyn std::error::Error>> {
+    let cases = experiments::load_bundled(&plan.scenes, plan.size);
+    let pt = PssmltSettings::kelemen2002().on(render::methods::PathBase::Pt);
+    let dr = DrmltSettings::rioux_lavoie2020_with;
+    let methods = vec![
+        method("PSSMLT/K", "pssmlt-k", PssmltSettings::kelemen2002()),
+        method(
+            "DR orbital on PSSMLT",
+            "dr-pssmlt",
+            dr(DrVariant::Orbital, DrBase::Pssmlt),
+        ),
+        method("PSSMLT-PT/K", "pssmlt-pt-k", pt),
+        method(
+            "DR orbital on PSSMLT-PT",
+            "dr-pssmlt-pt",
+            dr(DrVariant::Orbital, DrBase::PssmltPt),
+        ),
+        method("MMLT/K", "mmlt-k", MmltSettings::hachisuka2014()),
+        method(
+            "DR orbital on MMLT",
+            "dr-mmlt",
+            dr(DrVariant::Orbital, DrBase::Mmlt),
+        ),
+    ];
+    let table = TableSpec::errors([Measure::RelMse]).with(Column::step_cost());
+    let Some(results) = Experiment::new(plan)
+        .methods(methods)
+        .baseline("PSSMLT/K")
+        .scenes(cases)
+        .parameter("max depth", 5)
+        .parameter("chains", 256)
+        .parameter("large-step probability", 0.3)
+        .execute()?
+    else {
+        return Ok(());
+    };
+    results.write_with(&[table], "")?;
     Ok(())
 }
 
