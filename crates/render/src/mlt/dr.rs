@@ -1,13 +1,15 @@
 //! Delayed-rejection MLT (Rioux-Lavoie et al. 2020, docs/methods/drmlt.md)
 //! on the path samplers: the kernels of `mcmc_core::delayed_rejection` with the pairwise
-//! primary-sample-space stages of `pss` ([`pss::OnLayout`]).
+//! primary-sample-space stages of `pss` ([`pss::OnLayout`], [`pss::LazyPairwise`]).
 //!
 //! The kernels are `pss`'s renderer-agnostic recipes ([`pss::dr`]: every variant *bold then
 //! timid*, section 5.1, the second stage only after a rejected small step); this module keeps
-//! what is specific to BDPT and MMLT:
-//! - the pair layout, sized from the maximum path depth to cover what BDPT reads
-//!   ([`dr_layout`]); coordinates beyond it are renewed by large steps only (exact, see
-//!   [`pss::OnLayout`]);
+//! what is specific to BDPT, the path tracer and MMLT:
+//! - the orbital rule needs no layout ([`lazy_orbital_kernel`]: every pair of every stream,
+//!   computed where the path sampler reads); the other rules move a fixed layout per chain,
+//!   sized to what the path sampler reads ([`dr_layout`] for BDPT, [`pt_layout`] for the path
+//!   tracer, [`mmlt_layout`] per MMLT depth; [`chain_layout`]); coordinates beyond it are
+//!   renewed by large steps only (exact, see [`pss::OnLayout`]);
 //! - the second stage's streams. On MMLT (`DrBase::Mmlt`, section 5.1.2) the second stage
 //!   moves only the camera stream: the light subpath and the strategy choice (the first number
 //!   of the connection stream) stay fixed. Light-tracing strategies (t = 1, "Handling Light
@@ -17,10 +19,12 @@
 //!   [`LightTracing`]; the second stage never moves the strategy coordinate, so the reverse
 //!   path sees the same strategy and the choice is symmetric).
 //!
-//! Our reading where the paper fixes the MMLT strategy along the whole chain: the bold first
-//! stage here moves every stream's layout, strategy coordinate included, so a first-stage
+//! Our reading where the paper fixes the MMLT strategy along the whole chain: by default the
+//! bold first stage moves every stream, strategy coordinate included, so a first-stage
 //! candidate may change strategy (an exact move of the MMLT target; it is then judged by the
-//! usual acceptance). Only the second stage keeps the strategy.
+//! usual acceptance), and only the second stage keeps the strategy. [`lazy_orbital_kernel`]
+//! with `fixed_strategy` is the paper's chain: neither stage moves it, large steps draw it
+//! afresh.
 
 use mcmc_core::delayed_rejection::IndependentSecondStage;
 use mcmc_core::DelayedRejection;
