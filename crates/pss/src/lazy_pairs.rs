@@ -148,7 +148,7 @@ const DIRECTION_TRIES: u64 = 32;
 /// normalised, from the counter-based uniforms of a key derived from `key` (points `2t`,
 /// `2t + 1` of the sub-stream `draw`); about 1.27 points on average and no trigonometry.
 /// Exactly uniform: the accepted point is uniform on the annulus, whose direction is
-/// uniform; after [`DIRECTION_TRIES`] rejected points (probability below `1e-21`) the angle
+/// uniform; after 32 rejected points (probability below `1e-21`) the angle
 /// `2 pi u` of a further uniform, uniform too.
 #[inline]
 #[must_use]
