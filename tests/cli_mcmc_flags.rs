@@ -79,7 +79,7 @@ fn drmlt_flags() {
             "-o",
             path_str(&out),
         ],
-        &["--dr-on", "pssmlt or mmlt"],
+        &["--dr-on", "pssmlt, pssmlt-pt or mmlt"],
     );
 }
 
@@ -358,11 +358,11 @@ fn flags_without_effect_are_errors_naming_where_they_apply() {
     let out = dir.join("x.exr");
     for (args, needles) in [
         (
-            &["--integrator", "drmlt", "--direct-samples", "4"][..],
+            &["--integrator", "drmlt", "--dr-fixed-strategy"][..],
             &[
-                "--direct-samples",
+                "--dr-fixed-strategy",
                 "--integrator drmlt",
-                "applies to: pssmlt",
+                "drmlt with --dr-on mmlt and --dr-variant orbital",
             ][..],
         ),
         (

@@ -113,9 +113,14 @@ pub(crate) struct MethodFlags {
     /// `cheap-then-expensive` (Gaussian first stage, MALA second stage, Green-Mira; on MMLT).
     #[arg(long, value_name = "RULE", default_value = "orbital", value_parser = parse::dr_variant)]
     pub(crate) dr_variant: DrVariant,
-    /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).
-    #[arg(long, value_name = "pssmlt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
+    /// drmlt: the path sampler, `pssmlt` (over BDPT), `pssmlt-pt` (over the path tracer) or
+    /// `mmlt` (second stage on the camera subpath only).
+    #[arg(long, value_name = "pssmlt|pssmlt-pt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
     pub(crate) dr_on: DrBase,
+    /// drmlt with `--dr-on mmlt` and the orbital rule: keep MMLT's strategy along the chain
+    /// in both stages (the paper's chain; large steps still draw it afresh).
+    #[arg(long)]
+    pub(crate) dr_fixed_strategy: bool,
     /// pathmlt: the perturbation mixed with the bidirectional mutation (0.5 each, RA paper
     /// section 8.1), `lens` or `multichain`.
     #[arg(long, value_name = "lens|multichain", default_value = "lens", value_parser = parse::perturbation)]
@@ -246,6 +251,8 @@ impl MethodFlags {
                 s.mala.max_depth = self.mala_max_depth;
                 s.mala.gradient = self.mala_gradient;
                 s.roulette = self.roulette.unwrap_or(s.roulette);
+                s.direct = self.direct(s.direct);
+                s.fixed_strategy = self.dr_fixed_strategy;
             }
             MethodSettings::Mala(s) => {
                 s.chain = self.chain();

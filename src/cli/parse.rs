@@ -346,8 +346,9 @@ pub(crate) fn adapt(text: &str) -> Result<render::mlt::pathmlt::PathAdapt, Strin
 pub(crate) fn dr_on(text: &str) -> Result<render::mlt::dr::DrBase, String> {
     match text.trim().to_ascii_lowercase().as_str() {
         "pssmlt" => Ok(render::mlt::dr::DrBase::Pssmlt),
+        "pssmlt-pt" => Ok(render::mlt::dr::DrBase::PssmltPt),
         "mmlt" => Ok(render::mlt::dr::DrBase::Mmlt),
-        _ => Err(format!("expected pssmlt or mmlt, got '{text}'")),
+        _ => Err(format!("expected pssmlt, pssmlt-pt or mmlt, got '{text}'")),
     }
 }
 

@@ -30,6 +30,7 @@ pub mod dr;
 mod error;
 mod fresh;
 pub mod langevin;
+pub mod lazy_pairs;
 pub mod mala;
 mod mutation;
 pub mod noise;
@@ -45,9 +46,10 @@ pub mod testing;
 
 pub use error::PssError;
 pub use fresh::FreshPss;
+pub use lazy_pairs::{LazyOrbital, LazyPairParams, LazyPairwise};
 pub use mcmc_core::delayed_rejection::{WrappedCauchy, RIOUX_LAVOIE2020_RHO};
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
-pub use on_layout::{LayoutGhost, OnLayout, PairwiseMltProposal};
+pub use on_layout::{LayoutGhost, LogQPair, OnLayout, PairwiseMltProposal};
 pub use orbital::Orbital;
 pub use pairwise::{
     torus_displacement, Group, PairLayout, PairwiseKelemen, PairwiseKelemenParams,

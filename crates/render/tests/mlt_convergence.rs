@@ -168,7 +168,7 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             let base = DrBase::Pssmlt;
             match variant {
                 DrVariant::Orbital => MltDriver::new(&targets, settings).run(
-                    |p| dr::orbital_kernel(layout, base, p, 0),
+                    |p| dr::lazy_orbital_kernel(base, p, 0, false),
                     &NoProgress,
                     &cancel,
                 ),
@@ -220,28 +220,25 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
         ),
         Method::DrMis => {
             let targets = [PssmltTarget::new(scene, params, w, h)];
-            let layout = dr::dr_layout(params.max_depth);
             MltDriver::new(&targets, settings)
                 .estimator(MltEstimator {
                     large_step_mis: true,
                     ..MltEstimator::plain()
                 })
                 .run(
-                    |p| dr::orbital_kernel(layout, DrBase::Pssmlt, p, 0),
+                    |p| dr::lazy_orbital_kernel(DrBase::Pssmlt, p, 0, false),
                     &NoProgress,
                     &cancel,
                 )
         }
-        Method::DrMmlt => {
-            let layout = dr::dr_layout(params.max_depth);
-            MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings).run(
+        Method::DrMmlt => MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings)
+            .run(
                 PerChain(|slot: ChainSlot, p| {
-                    dr::orbital_kernel(layout, DrBase::Mmlt, p, slot.target as u32)
+                    dr::lazy_orbital_kernel(DrBase::Mmlt, p, slot.target as u32, false)
                 }),
                 &NoProgress,
                 &cancel,
-            )
-        }
+            ),
     }
 }
 
