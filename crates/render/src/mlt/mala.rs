@@ -28,7 +28,7 @@ use std::cell::RefCell;
 
 use mcmc_core::langevin::{CacheSharing, LangevinParams};
 use mcmc_core::{DifferentiableTarget, Target};
-use pss::langevin::moved_indices;
+use pss::langevin::{moved_count, moved_indices};
 use pss::mala::MalaParams;
 use pss::{Pending, PssState, SmallMutation};
 
@@ -163,37 +163,47 @@ impl<'s> DifferentiableMmlt<'s> {
         self.target.depth()
     }
 
-    /// The dual-number gradient of `ln L` at `x` (already evaluated) into `grad`, or false
-    /// where the evaluator does not apply.
+    /// The dual-number gradient of `ln L` at `x` (already evaluated) into `grad`, one entry
+    /// per continuous read ([`pss::langevin::PssCoordinates`] order), or false where the
+    /// evaluator does not apply.
     fn dual_gradient(&self, x: &PssState, grad: &mut Vec<f64>) -> bool {
         let counts = x.read_counts();
         if x.streams() != PATH_STREAMS || counts[PATH_STREAMS..].iter().any(|&c| c != 0) {
             return false;
         }
-        let n: usize = counts[..PATH_STREAMS].iter().sum();
+        let continuous = continuous_counts(x);
+        let n: usize = continuous.iter().sum();
         match n {
-            0..=8 => self.dual_lanes::<8>(x, n, grad),
-            9..=16 => self.dual_lanes::<16>(x, n, grad),
-            17..=24 => self.dual_lanes::<24>(x, n, grad),
-            25..=32 => self.dual_lanes::<32>(x, n, grad),
+            0..=8 => self.dual_lanes::<8>(x, continuous, grad),
+            9..=16 => self.dual_lanes::<16>(x, continuous, grad),
+            17..=24 => self.dual_lanes::<24>(x, continuous, grad),
+            25..=32 => self.dual_lanes::<32>(x, continuous, grad),
             _ => false,
         }
     }
 
-    fn dual_lanes<const N: usize>(&self, x: &PssState, n: usize, grad: &mut Vec<f64>) -> bool {
+    fn dual_lanes<const N: usize>(
+        &self,
+        x: &PssState,
+        continuous: [usize; PATH_STREAMS],
+        grad: &mut Vec<f64>,
+    ) -> bool {
         let Some(diff) = &self.diff else {
             return false;
         };
         let (_, params, size) = self.target.parts();
         let counts = x.read_counts();
-        let lanes = [0, counts[0], counts[0] + counts[1]];
-        let e = diff.evaluate::<Dual<N>>(
+        let mask = x.discrete_mask();
+        let lanes = [0, continuous[0], continuous[0] + continuous[1]];
+        let n = lanes[2] + continuous[2];
+        let e = diff.evaluate_continuous::<Dual<N>>(
             self.target.depth(),
             size,
             params.heuristic,
             x.raw_values(),
             PATH_STREAMS,
             lanes,
+            [mask[0], mask[1], mask[2]],
             Dual::variable,
         );
         let (Evaluation::Contribution { reads, .. }, Some(lum)) = (&e, e.luminance()) else {
@@ -213,6 +223,20 @@ impl<'s> DifferentiableMmlt<'s> {
         }));
         true
     }
+}
+
+/// Per path stream, the number of continuous reads of `x`'s last evaluation.
+fn continuous_counts(x: &PssState) -> [usize; PATH_STREAMS] {
+    let counts = x.read_counts();
+    let mask = x.discrete_mask();
+    std::array::from_fn(|s| {
+        let below = if counts[s] >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << counts[s]) - 1
+        };
+        counts[s] - (mask[s] & below).count_ones() as usize
+    })
 }
 
 impl Target for DifferentiableMmlt<'_> {
@@ -238,22 +262,21 @@ impl DifferentiableTarget for DifferentiableMmlt<'_> {
         }
         grad.clear();
         if !value.is_finite() {
-            let mut n = Vec::new();
-            moved_indices(x, &mut n);
-            grad.resize(n.len(), 0.0);
+            grad.resize(moved_count(x), 0.0);
             return value;
         }
         PROBE.with(|cell| {
             let (probe, probe_payload, indices) = &mut *cell.borrow_mut();
             moved_indices(x, indices);
-            let counts = x.read_counts();
+            let (counts, mask) = (x.read_counts(), x.discrete_mask());
             let key = mcmc_core::seed::mix64(x.key() ^ 0x4644_4752_4144_2121);
             let mut side = |i: usize, v: f64| -> Option<f64> {
                 probe.clone_from(x);
                 probe.set_pending(Pending::None, key);
                 probe.set(i, v);
                 let lp = self.target.evaluate(probe, probe_payload);
-                (lp.is_finite() && probe.read_counts() == counts).then_some(lp)
+                (lp.is_finite() && probe.read_counts() == counts && probe.discrete_mask() == mask)
+                    .then_some(lp)
             };
             let values = x.raw_values();
             for &i in indices.iter() {
