@@ -126,11 +126,13 @@ pub(crate) struct MethodFlags {
     /// quadtree; multichain: a direction quadtree per cell of the 20 x 20 screen grid).
     #[arg(long, value_name = "fixed|global|grid|quadtree", default_value = "fixed", value_parser = parse::adapt)]
     pub(crate) adapt: render::mlt::pathmlt::PathAdapt,
-    /// mala*: parameter preset, `paper` (Luan et al. 2020, section 7: epsilon 0.01, K 30,
-    /// H 10000) or `code` (the authors' code: epsilon 0.005, K 5, H 3000, preconditioner
-    /// clamped to [0.01, 100], shrink prior 0.005).
-    #[arg(long, value_name = "paper|code", default_value = "paper", value_parser = parse::mala_preset)]
-    pub(crate) mala_preset: mcmc_core::langevin::LangevinParams,
+    /// mala*: parameter preset, `paper` (Luan et al. 2020's text, section 7: epsilon 0.01 as
+    /// the variance of eq. 7, K 30, H 10000), `paper-values` (those values with the authors'
+    /// code's semantics: covariance epsilon^2 (M + 1), M in [0.01, 100], drift clamp 5, radius
+    /// 0.01 sqrt(d), first-visit Adam start, fallback step 0.1) or `code` (the authors' code:
+    /// epsilon 0.005, shrink prior 0.005, K 5, H 3000, otherwise as `paper-values`).
+    #[arg(long, value_name = "paper|paper-values|code", default_value = "paper", value_parser = parse::mala_preset)]
+    pub(crate) mala_preset: render::mlt::mala::MalaParams,
     /// mala*: chains of MMLT depth up to D run MALA, deeper ones the Kelemen small step,
     /// 0..=1024.
     #[arg(long, allow_negative_numbers = true, value_name = "D", default_value_t = 3,
@@ -242,14 +244,15 @@ impl MethodFlags {
                 s.variant = self.dr_variant;
                 s.on = self.dr_on;
                 s.large_step_mis = self.large_step_mis.unwrap_or(s.large_step_mis);
-                s.mala.params = self.mala_preset;
+                s.mala.params = self.mala_preset.langevin;
                 s.mala.max_depth = self.mala_max_depth;
                 s.mala.gradient = self.mala_gradient;
                 s.roulette = self.roulette.unwrap_or(s.roulette);
             }
             MethodSettings::Mala(s) => {
                 s.chain = self.chain();
-                s.config.params = self.mala_preset;
+                s.config.params = self.mala_preset.langevin;
+                s.config.fallback = self.mala_preset.fallback;
                 s.config.max_depth = self.mala_max_depth;
                 s.config.gradient = self.mala_gradient;
                 s.direct = self.direct(s.direct);

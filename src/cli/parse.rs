@@ -254,13 +254,17 @@ pub(crate) fn dr_variant(text: &str) -> Result<render::mlt::dr::DrVariant, Strin
         })
 }
 
-/// Parses `--mala-preset`.
-pub(crate) fn mala_preset(text: &str) -> Result<mcmc_core::langevin::LangevinParams, String> {
-    use mcmc_core::langevin::LangevinParams;
+/// Parses `--mala-preset`: `paper` (the paper's text), `paper-values` (its values with the
+/// authors' code's semantics) or `code` (the authors' code).
+pub(crate) fn mala_preset(text: &str) -> Result<render::mlt::mala::MalaParams, String> {
+    use render::mlt::mala::MalaParams;
     match text.trim().to_ascii_lowercase().as_str() {
-        "paper" => Ok(LangevinParams::luan2020()),
-        "code" => Ok(LangevinParams::luan2020_code()),
-        _ => Err(format!("expected paper or code, got '{text}'")),
+        "paper" => Ok(MalaParams::luan2020()),
+        "paper-values" => Ok(MalaParams::luan2020_values()),
+        "code" => Ok(MalaParams::luan2020_code()),
+        _ => Err(format!(
+            "expected paper, paper-values or code, got '{text}'"
+        )),
     }
 }
 

@@ -39,22 +39,41 @@ impl Default for MalaSettings {
 }
 
 impl MalaSettings {
-    /// The paper's method (Luan et al. 2020): hybrid adaptation (Alg. 4, the paper's main
-    /// algorithm) with section 7's parameters, epsilon 0.01, K = 30 neighbours, cache size
-    /// H = 10 000 ([`LangevinParams::luan2020`]); MALA on MMLT depths up to 3, Kelemen steps
-    /// beyond; gradients by forward-mode dual numbers.
+    /// The paper's method as its text reads (Luan et al. 2020): hybrid adaptation (Alg. 4,
+    /// the paper's main algorithm) with section 7's parameters, epsilon 0.01 as the variance
+    /// of eq. 7 (`Sigma = epsilon M`), K = 30 neighbours within radius 0.01, cache size
+    /// H = 10 000, Adam accumulators from zero ([`LangevinParams::luan2020`]); MALA on MMLT
+    /// depths up to 3, Kelemen steps beyond; gradients by forward-mode dual numbers.
     #[must_use]
     pub const fn luan2020() -> Self {
         Self::luan2020_variant(MalaVariant::Hybrid)
     }
 
-    /// [`MalaSettings::luan2020`] with the authors' code's constants
-    /// ([`LangevinParams::luan2020_code`]: step 0.005, K = 5, H = 3000, preconditioner
-    /// clamped to [0.01, 100], shrink prior 0.005) where they differ from the text.
+    /// The paper's values read with the authors' code's semantics
+    /// ([`LangevinParams::luan2020_values`]: epsilon 0.01 as a standard deviation with a
+    /// floor, covariance `epsilon^2 (M + 1)`, `M` in `[0.01, 100]`, drift clamped to `+-5`,
+    /// K = 30 within `0.01 sqrt(d)`, H = 10 000, first-visit Adam start), plus the code's
+    /// fallback step (probability 0.1, sigma 0.01 on every coordinate).
+    #[must_use]
+    pub const fn luan2020_values() -> Self {
+        let mut s = Self::luan2020();
+        let p = pss::mala::MalaParams::luan2020_values();
+        s.config.params = p.langevin;
+        s.config.fallback = p.fallback;
+        s
+    }
+
+    /// The authors' code ([`LangevinParams::luan2020_code`]: epsilon 0.005 as a standard
+    /// deviation, shrink prior 0.005, `M` in `[0.01, 100]`, drift clamped to `+-5`, K = 5
+    /// within `0.01 sqrt(d)`, H = 3000, first-visit Adam start), plus its fallback step
+    /// (probability 0.1). The code's large-step schedule (0.05 for the first tenth of a
+    /// chain, then 0.2) is not reproduced: the large step stays the chain settings'.
     #[must_use]
     pub const fn luan2020_code() -> Self {
         let mut s = Self::luan2020();
-        s.config.params = LangevinParams::luan2020_code();
+        let p = pss::mala::MalaParams::luan2020_code();
+        s.config.params = p.langevin;
+        s.config.fallback = p.fallback;
         s
     }
 
@@ -71,6 +90,7 @@ impl MalaSettings {
                 gradient: GradientMethod::Dual,
                 fd_step: 1e-4,
                 cheap_sigma: 1.0 / 64.0,
+                fallback: 0.0,
             },
             direct: Self::AUTHORS_DIRECT,
         }
@@ -110,11 +130,16 @@ pub(super) fn mala_note(config: &MalaConfig) -> String {
             config.fd_step
         ),
     };
+    let covariance = match config.params.covariance {
+        mcmc_core::langevin::Covariance::EpsilonM => "covariance epsilon M",
+        mcmc_core::langevin::Covariance::EpsilonSquaredMPlusOne => "covariance epsilon^2 (M + 1)",
+    };
     format!(
-        "Langevin MLT: {} (epsilon {}, truncation {}), MALA on MMLT depths <= {} and Kelemen beyond; {gradients}",
+        "Langevin MLT: {} (epsilon {}, {covariance}, truncation {}, fallback {}), MALA on the continuous primary samples of MMLT depths <= {} and Kelemen beyond; {gradients}",
         config.variant.name(),
         config.params.epsilon,
         config.params.max_gradient,
+        config.fallback,
         config.max_depth,
     )
 }

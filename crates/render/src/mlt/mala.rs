@@ -29,10 +29,9 @@ use std::cell::RefCell;
 use mcmc_core::langevin::{CacheSharing, LangevinParams};
 use mcmc_core::{DifferentiableTarget, Target};
 use pss::langevin::{moved_count, moved_indices};
-use pss::mala::MalaParams;
 use pss::{Pending, PssState, SmallMutation};
 
-pub use pss::mala::{MalaChainKernel, MalaVariant};
+pub use pss::mala::{MalaChainKernel, MalaParams, MalaVariant};
 
 use super::{MmltTarget, PathPayload, PATH_STREAMS};
 use crate::bdpt::diff::{DiffScene, Dual, Evaluation};
@@ -76,6 +75,9 @@ pub struct MalaConfig {
     /// Standard deviation of the cheap first stage of `--dr-variant cheap-then-expensive`
     /// (default 1/64, Kelemen 2002's `s2`).
     pub cheap_sigma: f64,
+    /// Probability of the fallback step ([`MalaParams::fallback`]; default 0, the paper's
+    /// text).
+    pub fallback: f64,
 }
 
 impl Default for MalaConfig {
@@ -88,6 +90,7 @@ impl Default for MalaConfig {
             gradient: GradientMethod::Dual,
             fd_step: 1e-4,
             cheap_sigma: p.cheap_sigma,
+            fallback: p.fallback,
         }
     }
 }
@@ -102,6 +105,7 @@ impl MalaConfig {
             langevin: self.params,
             max_depth: self.max_depth,
             cheap_sigma: self.cheap_sigma,
+            fallback: self.fallback,
         }
     }
 }
