@@ -2,7 +2,10 @@
 //! MMLT: MALA small steps on shallow depths with plain, online, cache-driven or hybrid
 //! adaptation of the preconditioner, Kelemen steps beyond ([`crate::mlt::mala`]).
 
-use mcmc_core::langevin::LangevinParams;
+use mcmc_core::langevin::{
+    LangevinParams, FALLBACK_COMPONENT, LARGE_STEP_COMPONENT, MALA_COMPONENT,
+};
+use mcmc_core::stats::AcceptanceStats;
 
 use super::direct_pass::{self, DirectSettings};
 use super::{
@@ -91,6 +94,7 @@ impl MalaSettings {
                 fd_step: 1e-4,
                 cheap_sigma: 1.0 / 64.0,
                 fallback: 0.0,
+                cache_round: mala::CACHE_ROUND_MUTATIONS,
             },
             direct: Self::AUTHORS_DIRECT,
         }
@@ -144,6 +148,34 @@ pub(super) fn mala_note(config: &MalaConfig) -> String {
     )
 }
 
+/// One line on the acceptance per kind of step: the Langevin proposals (component
+/// [`MALA_COMPONENT`]; with `--max-depth` above the MALA depth it also counts the Kelemen
+/// small steps of the deeper chains), the large steps and the fallback steps.
+pub(super) fn langevin_acceptance_note(
+    stats: &AcceptanceStats,
+    config: &MalaConfig,
+    common: &RenderSettings,
+) -> String {
+    let part = |j: usize, what: &str| {
+        format!(
+            "{what} {:.3} of {}",
+            stats.component_acceptance_rate(j),
+            stats.proposed[j]
+        )
+    };
+    let deeper = if common.max_depth > config.max_depth {
+        " (with the Kelemen small steps of depths beyond the MALA depth)"
+    } else {
+        ""
+    };
+    format!(
+        "acceptance by step: {}{deeper}, {}, {}",
+        part(MALA_COMPONENT, "Langevin"),
+        part(LARGE_STEP_COMPONENT, "large"),
+        part(FALLBACK_COMPONENT, "fallback"),
+    )
+}
+
 impl Method for MalaSettings {
     fn kind(&self) -> IntegratorKind {
         match self.config.variant {
@@ -189,6 +221,9 @@ impl Method for MalaSettings {
             run.cancel,
         );
         let chains_ran = out.mutations > 0;
+        if chains_ran {
+            notes.push(langevin_acceptance_note(&out.stats, &self.config, common));
+        }
         let mut output = mcmc_output(out, notes, run.start.elapsed());
         if let Some(d) = direct {
             direct_pass::merge_into(d, &mut output, common, run, chains_ran);

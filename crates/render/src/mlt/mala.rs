@@ -78,7 +78,17 @@ pub struct MalaConfig {
     /// Probability of the fallback step ([`MalaParams::fallback`]; default 0, the paper's
     /// text).
     pub fallback: f64,
+    /// Mutations per chain between two poolings of the gradient caches of `mala-cache` and
+    /// `mala-hybrid` (the render loop's round length; default [`CACHE_ROUND_MUTATIONS`]).
+    /// Short rounds let the shared cache fill within short renders; the pooling order is
+    /// fixed, so the image stays identical for any thread count.
+    pub cache_round: u64,
 }
+
+/// Default [`MalaConfig::cache_round`]: 64 mutations per chain (like path-space MLT's
+/// adaptation rounds; the render loop's default round is 1000, which pools a 3 s render's
+/// caches about once).
+pub const CACHE_ROUND_MUTATIONS: u64 = 64;
 
 impl Default for MalaConfig {
     fn default() -> Self {
@@ -91,6 +101,7 @@ impl Default for MalaConfig {
             fd_step: 1e-4,
             cheap_sigma: p.cheap_sigma,
             fallback: p.fallback,
+            cache_round: CACHE_ROUND_MUTATIONS,
         }
     }
 }
@@ -375,19 +386,21 @@ pub fn render_from_depth(
         .into_iter()
         .map(|t| DifferentiableMmlt::new(t, config.fd_step).with_method(config.gradient))
         .collect();
-    super::MltDriver::new(&targets, settings)
-        .first_depth(min_depth)
-        .run_with_controller(
-            super::PerChain(|slot: mcmc_core::render_loop::ChainSlot, p| {
-                let depth = targets[slot.target].depth();
-                if cheap_then_expensive {
-                    cheap_then_expensive_kernel(config, depth, small, p)
-                } else {
-                    mala_kernel(config, depth, small, p)
-                }
-            }),
-            |_| CacheSharing,
-            progress,
-            cancel,
-        )
+    let mut driver = super::MltDriver::new(&targets, settings).first_depth(min_depth);
+    if config.variant.has_cache() && !cheap_then_expensive {
+        driver = driver.round_mutations(config.cache_round);
+    }
+    driver.run_with_controller(
+        super::PerChain(|slot: mcmc_core::render_loop::ChainSlot, p| {
+            let depth = targets[slot.target].depth();
+            if cheap_then_expensive {
+                cheap_then_expensive_kernel(config, depth, small, p)
+            } else {
+                mala_kernel(config, depth, small, p)
+            }
+        }),
+        |_| CacheSharing,
+        progress,
+        cancel,
+    )
 }
