@@ -129,6 +129,12 @@ pub(super) fn mala_note(config: &MalaConfig) -> String {
              differences, h = {:e}, where they do not apply)",
             config.fd_step
         ),
+        GradientMethod::DualConstantMis => format!(
+            "gradients by forward-mode dual numbers with the MIS weight held constant \
+             (--mala-gradient dual-constant-mis; central finite differences, h = {:e}, where \
+             they do not apply)",
+            config.fd_step
+        ),
         GradientMethod::FiniteDifference => format!(
             "gradients by central finite differences (--mala-gradient fd, h = {:e})",
             config.fd_step

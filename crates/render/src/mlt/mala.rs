@@ -45,14 +45,19 @@ pub enum GradientMethod {
     /// between the f32 and f64 arithmetic).
     #[default]
     Dual,
+    /// As [`GradientMethod::Dual`], with the strategy's MIS weight held constant (computed
+    /// from the values, not differentiated): the gradient of the log of the unweighted
+    /// contribution. Cheaper; still exact, as every deterministic gradient function is.
+    DualConstantMis,
     /// Central finite differences of the f32 evaluator (one-sided near a structure change).
     FiniteDifference,
 }
 
 impl GradientMethod {
     /// The methods with their `--mala-gradient` names.
-    pub const ALL: [(&'static str, GradientMethod); 2] = [
+    pub const ALL: [(&'static str, GradientMethod); 3] = [
         ("dual", GradientMethod::Dual),
+        ("dual-constant-mis", GradientMethod::DualConstantMis),
         ("fd", GradientMethod::FiniteDifference),
     ];
 }
@@ -134,7 +139,8 @@ thread_local! {
 ///
 /// - [`GradientMethod::Dual`] (default): the f32 evaluator gives the value
 ///   the chain uses; the differentiable evaluator [`crate::bdpt::diff`] replays the same path
-///   in forward-mode dual numbers (one lane per coordinate read, 8/16/24/32 lanes) and gives
+///   in forward-mode dual numbers (one lane per *continuous* coordinate read, 4/8/12/16/24/32
+///   lanes; discrete numbers are constants of the replay) and gives
 ///   `d ln L / du = (dL/du) / L`. Where it does not apply it falls back to finite
 ///   differences.
 /// - [`GradientMethod::FiniteDifference`]: central differences of the f32 evaluator with step
@@ -169,6 +175,9 @@ impl<'s> DifferentiableMmlt<'s> {
     #[must_use]
     pub fn with_method(mut self, method: GradientMethod) -> Self {
         self.method = method;
+        self.diff = self
+            .diff
+            .map(|d| d.with_constant_mis(method == GradientMethod::DualConstantMis));
         self
     }
 
@@ -189,8 +198,10 @@ impl<'s> DifferentiableMmlt<'s> {
         let continuous = continuous_counts(x);
         let n: usize = continuous.iter().sum();
         match n {
-            0..=8 => self.dual_lanes::<8>(x, continuous, grad),
-            9..=16 => self.dual_lanes::<16>(x, continuous, grad),
+            0..=4 => self.dual_lanes::<4>(x, continuous, grad),
+            5..=8 => self.dual_lanes::<8>(x, continuous, grad),
+            9..=12 => self.dual_lanes::<12>(x, continuous, grad),
+            13..=16 => self.dual_lanes::<16>(x, continuous, grad),
             17..=24 => self.dual_lanes::<24>(x, continuous, grad),
             25..=32 => self.dual_lanes::<32>(x, continuous, grad),
             _ => false,
@@ -272,7 +283,11 @@ impl DifferentiableTarget for DifferentiableMmlt<'_> {
     ) -> f64 {
         let value = self.target.evaluate(x, payload);
         grad.clear();
-        if value.is_finite() && self.method == GradientMethod::Dual && self.dual_gradient(x, grad) {
+        let dual = matches!(
+            self.method,
+            GradientMethod::Dual | GradientMethod::DualConstantMis
+        );
+        if value.is_finite() && dual && self.dual_gradient(x, grad) {
             return value;
         }
         grad.clear();

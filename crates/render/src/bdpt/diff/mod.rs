@@ -136,8 +136,19 @@ impl<'s> DiffScene<'s> {
             ctx: path::Ctx {
                 scene,
                 camera: geometry::Camera::new(scene.camera().params()),
+                constant_mis: false,
             },
         })
+    }
+
+    /// The same scene with the MIS weight of a strategy computed from the vertices' values
+    /// and entering as a constant (`on`), or differentiated like everything else: the
+    /// gradient then covers the contribution only, at a fraction of the cost (the MIS
+    /// weight's densities are most of the replay's arithmetic).
+    #[must_use]
+    pub fn with_constant_mis(mut self, on: bool) -> Self {
+        self.ctx.constant_mis = on;
+        self
     }
 
     /// Evaluates the multiplexed-MLT strategy of `depth` selected by the primary samples

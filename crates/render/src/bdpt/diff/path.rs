@@ -87,6 +87,9 @@ pub(super) enum Stop {
 pub(super) struct Ctx<'s> {
     pub(super) scene: &'s Scene,
     pub(super) camera: Camera,
+    /// The MIS weight is computed from the vertices' values and enters as a constant (its
+    /// derivatives are not carried).
+    pub(super) constant_mis: bool,
 }
 
 impl Ctx<'_> {
