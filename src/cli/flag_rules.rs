@@ -270,7 +270,7 @@ mod tests {
         ("dr_on", Some(["mmlt", "pssmlt"])),
         ("perturbation", Some(["lens", "multichain"])),
         ("adapt", Some(["global", "grid"])),
-        ("mala_preset", Some(["paper", "paper-values", "code"])),
+        ("mala_preset", Some(["paper", "paper-values"])),
         ("mala_max_depth", Some(["2", "4"])),
         ("mala_gradient", Some(["dual", "fd"])),
         ("lqmc_preset", Some(["code", "paper"])),

@@ -166,7 +166,7 @@ impl LobeChoice {
 
     /// Reads the path; writes the gradient of `ln pi` with respect to the continuous numbers
     /// (in read order) into `grad` if given.
-    fn read(&self, x: &mut PssState, mut grad: Option<&mut Vec<f64>>) -> f64 {
+    fn read(&self, x: &mut PssState, grad: Option<&mut Vec<f64>>) -> f64 {
         x.begin();
         let branch_a = x.next_discrete() < 0.5;
         let u1 = x.next_sample();
@@ -190,7 +190,7 @@ impl LobeChoice {
                 Read::Unread => {}
             }
         }
-        if let Some(grad) = grad.as_deref_mut() {
+        if let Some(grad) = grad {
             grad.clear();
             grad.extend_from_slice(&g[..n]);
         }
