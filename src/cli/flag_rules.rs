@@ -192,6 +192,11 @@ pub(crate) const RULES: &[FlagRule] = &[
         also: "drmlt with --dr-variant cheap-then-expensive",
     },
     FlagRule {
+        id: "mala_kernel",
+        applies: |m| matches!(m, M::Mala(_)),
+        also: "",
+    },
+    FlagRule {
         id: "mala_max_depth",
         applies: |m| matches!(m, M::Mala(_)) || drmlt_langevin(m),
         also: "drmlt with --dr-variant cheap-then-expensive",
@@ -271,6 +276,7 @@ mod tests {
         ("perturbation", Some(["lens", "multichain"])),
         ("adapt", Some(["global", "grid"])),
         ("mala_preset", Some(["paper", "paper-values"])),
+        ("mala_kernel", Some(["mala", "cheap-then-expensive"])),
         ("mala_max_depth", Some(["2", "4"])),
         ("mala_gradient", Some(["dual", "fd"])),
         ("lqmc_preset", Some(["code", "paper"])),
@@ -316,7 +322,7 @@ mod tests {
             "strategy_images" => vec!["bdpt"],
             "dr_variant" | "dr_on" => vec!["drmlt"],
             "perturbation" | "adapt" => vec!["pathmlt"],
-            "mala_preset" | "mala_max_depth" | "mala_gradient" => MALA.to_vec(),
+            "mala_preset" | "mala_max_depth" | "mala_gradient" | "mala_kernel" => MALA.to_vec(),
             "lqmc_preset" => vec!["lqmc"],
             other => panic!("no expectation for {other}"),
         }

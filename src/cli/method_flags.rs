@@ -138,10 +138,16 @@ pub(crate) struct MethodFlags {
     #[arg(long, allow_negative_numbers = true, value_name = "D", default_value_t = 3,
           value_parser = clap::value_parser!(u32).range(0..=1024))]
     pub(crate) mala_max_depth: u32,
+    /// mala*: the kernel of the Langevin chains, `mala` (the variant's MALA) or
+    /// `cheap-then-expensive` (the DR paper's section 5.2: an isotropic Gaussian of sigma 1/64,
+    /// then plain MALA), with the same direct pass, chains and large steps.
+    #[arg(long, value_name = "mala|cheap-then-expensive", default_value = "mala", value_parser = parse::mala_kernel)]
+    pub(crate) mala_kernel: parse::CheapThenExpensive,
     /// mala*: gradient of the log contribution, `dual` (forward-mode dual numbers through the
-    /// differentiable path evaluator; finite differences where it does not apply) or `fd`
-    /// (central finite differences of the f32 renderer).
-    #[arg(long, value_name = "dual|fd", default_value = "dual", value_parser = parse::mala_gradient)]
+    /// differentiable path evaluator; finite differences where it does not apply),
+    /// `dual-constant-mis` (the same with the MIS weight held constant) or `fd` (central
+    /// finite differences of the f32 renderer).
+    #[arg(long, value_name = "dual|dual-constant-mis|fd", default_value = "dual", value_parser = parse::mala_gradient)]
     pub(crate) mala_gradient: render::mlt::mala::GradientMethod,
     /// lqmc: parameter preset, `paper` (Tessari et al. 2020: NEE paths that are neither
     /// caustic nor out of focus splatted unexplored) or `code` (the authors' code: those NEE
@@ -253,6 +259,7 @@ impl MethodFlags {
                 s.chain = self.chain();
                 s.config.params = self.mala_preset.langevin;
                 s.config.fallback = self.mala_preset.fallback;
+                s.cheap_then_expensive = self.mala_kernel.0;
                 s.config.max_depth = self.mala_max_depth;
                 s.config.gradient = self.mala_gradient;
                 s.direct = self.direct(s.direct);

@@ -320,7 +320,22 @@ pub(crate) fn mala_gradient(text: &str) -> Result<render::mlt::mala::GradientMet
         .iter()
         .find(|(name, _)| *name == t)
         .map(|(_, m)| *m)
-        .ok_or_else(|| format!("expected dual or fd, got '{text}'"))
+        .ok_or_else(|| format!("expected dual, dual-constant-mis or fd, got '{text}'"))
+}
+
+/// `--mala-kernel`: true for `cheap-then-expensive`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct CheapThenExpensive(pub(crate) bool);
+
+/// Parses `--mala-kernel`.
+pub(crate) fn mala_kernel(text: &str) -> Result<CheapThenExpensive, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "mala" => Ok(CheapThenExpensive(false)),
+        "cheap-then-expensive" => Ok(CheapThenExpensive(true)),
+        _ => Err(format!(
+            "expected mala or cheap-then-expensive, got '{text}'"
+        )),
+    }
 }
 
 /// Parses `--perturbation`.

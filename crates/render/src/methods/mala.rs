@@ -32,6 +32,12 @@ pub struct MalaSettings {
     /// two segments, our depths 0 and 1, by a separate 256-spp pass; the paper's text does
     /// not say).
     pub direct: DirectSettings,
+    /// Run the cheap-then-expensive delayed-rejection kernel (DR paper section 5.2: an
+    /// isotropic Gaussian of `config.cheap_sigma`, then plain MALA) in place of the
+    /// variant's MALA, with the same direct pass, chains and large steps as the `mala*`
+    /// rows (for comparisons; the command line's is `drmlt --dr-variant
+    /// cheap-then-expensive`). Default false.
+    pub cheap_then_expensive: bool,
 }
 
 impl Default for MalaSettings {
@@ -97,6 +103,7 @@ impl MalaSettings {
                 cache_round: mala::CACHE_ROUND_MUTATIONS,
             },
             direct: Self::AUTHORS_DIRECT,
+            cheap_then_expensive: false,
         }
     }
 
@@ -219,7 +226,7 @@ impl Method for MalaSettings {
             scene,
             params,
             &self.config,
-            false,
+            self.cheap_then_expensive,
             &mlt_settings,
             self.chain.small_step,
             min_depth,
