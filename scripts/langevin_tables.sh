@@ -98,8 +98,10 @@ for seed in $(seq 1 "$seeds"); do
 done
 echo "# end $(date -u '+%Y-%m-%d %H:%M:%S UTC'), loadavg $(cat /proc/loadavg)" >> "$results"
 echo "# medians (scene method mse relmse)"
-grep -v '^#' "$results" | sort -k2,2 -k3,3 | awk '
-    function flush() { if (n) { asort(m); asort(r); printf "%s %s %s %s\n", s, meth, m[int((n+1)/2)], r[int((n+1)/2)] } }
-    { key = $2 " " $3; if (key != last) { flush(); n = 0; delete m; delete r; last = key; s = $2; meth = $3 }
-      n++; m[n] = $5; r[n] = $6 }
-    END { flush() }'
+median() { # column, scene, method
+    grep -v '^#' "$results" | awk -v c="$1" -v s="$2" -v m="$3" '$2 == s && $3 == m { print $c }' |
+        sort -g | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'
+}
+grep -v '^#' "$results" | awk '{ print $2, $3 }' | sort -u | while read -r scene method; do
+    echo "$scene $method $(median 5 "$scene" "$method") $(median 6 "$scene" "$method")"
+done

@@ -257,6 +257,37 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
 
+    #[test]
+    fn the_code_semantics_floor_the_step_and_clamp_the_drift() {
+        // The paper's text: Sigma = epsilon M, no clamp.
+        let text = LangevinParams::luan2020();
+        let mut q = ProposalGaussian::default();
+        q.set_diagonal(&text, &[0.0001, 100.0], &[40.0, -40.0]);
+        assert!((q.std[0] - (0.01f64 * 0.0001).sqrt()).abs() < 1e-15);
+        assert!((q.mean[0] - 0.5 * 0.01 * 0.0001 * 40.0).abs() < 1e-15);
+        // The paper's values with the code's semantics: Sigma = epsilon^2 (M + 1), M clamped
+        // to [0.01, 100], drift clamped to +-5: sigma from 0.01 to about 0.1.
+        let values = LangevinParams::luan2020_values();
+        q.set_diagonal(&values, &[0.0001, 1e6], &[40.0, -40.0]);
+        let var = [1e-4 * 1.01, 1e-4 * 101.0];
+        for (i, v) in var.iter().enumerate() {
+            assert!((q.std[i] - v.sqrt()).abs() < 1e-15, "{i}");
+        }
+        assert!((q.mean[0] - 0.5 * var[0] * 5.0).abs() < 1e-15);
+        assert!((q.mean[1] + 0.5 * var[1] * 5.0).abs() < 1e-15);
+        // The code: the shrink prior's precision is added.
+        let code = LangevinParams::luan2020_code();
+        q.set_diagonal(&code, &[1.0], &[0.0]);
+        let var = 1.0 / (1.0 / (0.005f64 * 0.005 * 2.0) + 1.0 / (0.005f64 * 0.005));
+        assert!((q.std[0] - var.sqrt()).abs() < 1e-15);
+        // Radius per dimension.
+        assert_eq!(text.query_radius(16), 0.01);
+        assert!((values.query_radius(16) - 0.04).abs() < 1e-15);
+        let mut bad = values;
+        bad.drift_clamp = 0.0;
+        assert!(bad.validate().is_err());
+    }
+
     #[cfg(feature = "nalgebra")]
     #[test]
     fn diagonal_and_full_agree_for_a_diagonal_matrix() {
