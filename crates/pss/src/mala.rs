@@ -9,9 +9,12 @@
 //!   Chains of depth `<= MalaParams::max_depth` use MALA, deeper ones PSSMLT's Kelemen small
 //!   step. The depth is fixed per chain, so the choice is a fixed kernel per chain and needs
 //!   no state-dependent selection term.
-//! - **Coordinates.** MALA moves the coordinates the current state read, in
-//!   [`PssCoordinates`] order, which is the order the target's gradient must be written in; a
-//!   candidate that reads another set of coordinates is rejected.
+//! - **Coordinates.** MALA moves the continuous coordinates the current state read (not the
+//!   ones the target tagged discrete with [`crate::PssState::next_discrete`]), in
+//!   [`PssCoordinates`] order, which is the order the target's gradient must be written in;
+//!   a candidate that reads another set of coordinates or tags others discrete is rejected.
+//!   Discrete coordinates move by large steps and by the optional fallback step
+//!   ([`MalaParams::fallback`], every coordinate).
 //! - **Variants** ([`MalaVariant`]): plain (eq. 7), online (Alg. 2, diminishing adaptation),
 //!   cache-driven (Alg. 3), hybrid (Alg. 4). Adaptation is kept per dimension
 //!   ([`PerDimension`]); the caches of the cache-driven and hybrid variants are shared among

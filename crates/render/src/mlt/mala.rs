@@ -12,9 +12,13 @@
 //!   section 7 rule stated by path depth: our layout reads about 4 numbers per vertex — camera
 //!   stream: raster 2 + lens 2 + time 1 + 4 per bounce; light stream: 5 + 4 per bounce;
 //!   connection stream: the strategy choice plus up to 3 — so the default depth 3 moves at
-//!   most about 20 coordinates; docs/methods/mala.md has the measured dimensions). A MALA
-//!   candidate that reads a different set of coordinates than the current state (another
-//!   strategy, a path that ends early) is rejected ([`pss::langevin::PssCoordinates`]).
+//!   most about 20 coordinates; docs/methods/mala.md has the measured dimensions). The path
+//!   evaluator tags the numbers it consumes as discrete choices or not at all (strategy,
+//!   light and lobe choices, a delta BSDF's direction numbers, a pinhole's lens, a static
+//!   camera's time: `Sampler::next_1d_discrete`); MALA moves and differentiates only the
+//!   others. A MALA candidate that reads a different set of coordinates than the current
+//!   state (another strategy, a path that ends early) or tags others discrete is rejected
+//!   ([`pss::langevin::PssCoordinates`]).
 //! - **Variants** (`--integrator`, [`MalaVariant`]): `mala` (plain, eq. 7), `mala-online`
 //!   (Alg. 2, diminishing adaptation), `mala-cache` (Alg. 3), `mala-hybrid` (Alg. 4); each
 //!   mixed with the large step of the MCMC settings. The caches of `mala-cache` and
