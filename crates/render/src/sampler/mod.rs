@@ -66,11 +66,12 @@ pub trait Sampler {
     fn next_1d_discrete(&mut self) -> f32 {
         self.next_1d()
     }
-    /// Two numbers as [`Sampler::next_1d_discrete`] (an unused direction or lens sample).
+    /// The next two numbers as [`Sampler::next_2d`] (the same numbers: a stratified sampler
+    /// keeps its 2-D pattern), consumed as [`Sampler::next_1d_discrete`] (an unused direction
+    /// or lens sample).
     #[inline]
     fn next_2d_discrete(&mut self) -> Vec2 {
-        let x = self.next_1d_discrete();
-        Vec2::new(x, self.next_1d_discrete())
+        self.next_2d()
     }
 }
 
