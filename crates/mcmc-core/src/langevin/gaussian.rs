@@ -269,7 +269,7 @@ mod tests {
         // to [0.01, 100], drift clamped to +-5: sigma from 0.01 to about 0.1.
         let values = LangevinParams::luan2020_values();
         q.set_diagonal(&values, &[0.0001, 1e6], &[40.0, -40.0]);
-        let var = [1e-4 * 1.01, 1e-4 * 101.0];
+        let var: [f64; 2] = [1e-4 * 1.01, 1e-4 * 101.0];
         for (i, v) in var.iter().enumerate() {
             assert!((q.std[i] - v.sqrt()).abs() < 1e-15, "{i}");
         }
