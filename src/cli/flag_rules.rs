@@ -199,6 +199,11 @@ pub(crate) const RULES: &[FlagRule] = &[
         also: "drmlt with --dr-variant cheap-then-expensive",
     },
     FlagRule {
+        id: "mala_kernel",
+        applies: |m| matches!(m, M::Mala(_)),
+        also: "",
+    },
+    FlagRule {
         id: "mala_max_depth",
         applies: |m| matches!(m, M::Mala(_)) || drmlt_langevin(m),
         also: "drmlt with --dr-variant cheap-then-expensive",
@@ -278,7 +283,8 @@ mod tests {
         ("dr_fixed_strategy", None),
         ("perturbation", Some(["lens", "multichain"])),
         ("adapt", Some(["global", "grid"])),
-        ("mala_preset", Some(["paper", "code"])),
+        ("mala_preset", Some(["paper", "paper-values"])),
+        ("mala_kernel", Some(["mala", "cheap-then-expensive"])),
         ("mala_max_depth", Some(["2", "4"])),
         ("mala_gradient", Some(["dual", "fd"])),
         ("lqmc_preset", Some(["code", "paper"])),
@@ -328,7 +334,7 @@ mod tests {
             // Only with --dr-on mmlt (not drmlt's default sampler).
             "dr_fixed_strategy" => vec![],
             "perturbation" | "adapt" => vec!["pathmlt"],
-            "mala_preset" | "mala_max_depth" | "mala_gradient" => MALA.to_vec(),
+            "mala_preset" | "mala_max_depth" | "mala_gradient" | "mala_kernel" => MALA.to_vec(),
             "lqmc_preset" => vec!["lqmc"],
             other => panic!("no expectation for {other}"),
         }

@@ -57,4 +57,4 @@ pub use pairwise::{
 };
 pub use proposal::{LargeStep, PssmltProposal, SmallStep, ALL_STREAMS};
 pub use raster::{RasterParams, RasterStep, RASTER_DEFAULT_PROBABILITY};
-pub use state::{Pending, PssState, MAX_STREAMS};
+pub use state::{Pending, PssState, MAX_STREAMS, TAGGED_READS};

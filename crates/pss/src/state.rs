@@ -123,8 +123,14 @@ pub struct PssState {
     /// Parent values this candidate's evaluation drew (index, value): see the type docs.
     observed: Vec<(usize, f64)>,
     cursor: [usize; MAX_STREAMS],
+    /// Per stream: bit `k` set if the last evaluation consumed the stream's `k`-th number as
+    /// a discrete choice or not at all ([`PssState::next_discrete`]).
+    discrete: [u64; MAX_STREAMS],
     stream: usize,
 }
+
+/// Reads per stream whose discrete tag is recorded (later reads count as continuous).
+pub const TAGGED_READS: usize = 64;
 
 /// Stamp of a coordinate that was never read.
 const NEVER: u64 = u64::MAX;
@@ -155,6 +161,7 @@ impl Clone for PssState {
         self.parent_key = source.parent_key;
         self.observed.clone_from(&source.observed);
         self.cursor = source.cursor;
+        self.discrete = source.discrete;
         self.stream = source.stream;
     }
 }
@@ -236,6 +243,7 @@ impl PssState {
             parent_key: key,
             observed: Vec::new(),
             cursor: [0; MAX_STREAMS],
+            discrete: [0; MAX_STREAMS],
             stream: 0,
         }
     }
@@ -255,6 +263,7 @@ impl PssState {
         self.key = key;
         self.parent_key = key;
         self.cursor = [0; MAX_STREAMS];
+        self.discrete = [0; MAX_STREAMS];
         self.stream = 0;
     }
 
@@ -342,9 +351,27 @@ impl PssState {
         self.cursor
     }
 
-    /// Rewinds all stream cursors; targets call this before reading a path.
+    /// Which numbers of each stream the last evaluation tagged discrete
+    /// ([`PssState::next_discrete`]): bit `k` of entry `s` for the `k`-th number of stream `s`
+    /// (the first [`TAGGED_READS`] numbers of a stream; later ones are untagged). MALA keeps
+    /// tagged coordinates fixed ([`crate::langevin::PssCoordinates`]).
+    #[must_use]
+    pub fn discrete_mask(&self) -> [u64; MAX_STREAMS] {
+        self.discrete
+    }
+
+    /// True if the `k`-th number of stream `s` was tagged discrete by the last evaluation.
+    #[inline]
+    #[must_use]
+    pub fn is_discrete(&self, s: usize, k: usize) -> bool {
+        s < MAX_STREAMS && k < TAGGED_READS && self.discrete[s] & (1u64 << k) != 0
+    }
+
+    /// Rewinds all stream cursors and clears the discrete tags; targets call this before
+    /// reading a path.
     pub fn begin(&mut self) {
         self.cursor = [0; MAX_STREAMS];
+        self.discrete = [0; MAX_STREAMS];
         self.stream = 0;
     }
 
@@ -360,6 +387,24 @@ impl PssState {
         let index = s + self.streams * self.cursor[s];
         self.cursor[s] += 1;
         self.get(index)
+    }
+
+    /// As [`PssState::next_sample`], for a number the target consumes as a *discrete* choice
+    /// (a strategy, a lobe, a light, a Russian-roulette decision) or does not use at all (the
+    /// lens of a pinhole camera, the time of a static scene): its derivative is zero almost
+    /// everywhere, so differentiating or moving it in a Langevin step only wastes the step.
+    /// The read is tagged ([`PssState::discrete_mask`]) and MALA keeps it fixed; large steps
+    /// and the other proposals move it like any number. Tagging is a question of efficiency,
+    /// never of exactness: MALA is exact for any tags that are a function of the state
+    /// (docs/methods/mala.md, "Continuous coordinates").
+    #[inline]
+    pub fn next_discrete(&mut self) -> f64 {
+        let s = self.stream;
+        let k = self.cursor[s];
+        if k < TAGGED_READS {
+            self.discrete[s] |= 1u64 << k;
+        }
+        self.next_sample()
     }
 
     /// Coordinate `index` (interleaved numbering), brought up to date; grows the state with

@@ -177,13 +177,18 @@ fn gradient(c: &mut Criterion) {
         let mut x = PssState::new(PATH_STREAMS, key);
         target.evaluate(&mut x, &mut payload);
         let dims: usize = x.read_counts().iter().sum();
-        let mut group = c.benchmark_group(format!("mmlt_depth{depth}_{dims}_dims"));
+        let moved = pss::langevin::moved_count(&x);
+        let mut group = c.benchmark_group(format!("mmlt_depth{depth}_{dims}_dims_{moved}_moved"));
         group.bench_function("value", |b| {
             b.iter(|| black_box(target.evaluate(&mut x, &mut payload)))
         });
         let mut grad = Vec::new();
         group.bench_function("value_and_gradient_dual", |b| {
             b.iter(|| black_box(target.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
+        });
+        let constant_mis = target.with_method(GradientMethod::DualConstantMis);
+        group.bench_function("value_and_gradient_dual_constant_mis", |b| {
+            b.iter(|| black_box(constant_mis.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
         });
         // The replay alone in f64 (no derivatives): what the dual pass costs without lanes.
         let counts = x.read_counts();

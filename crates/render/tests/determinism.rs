@@ -254,3 +254,35 @@ fn drmlt_over_the_path_tracer_and_with_the_direct_pass_is_bit_identical() {
         );
     }
 }
+
+/// The cache-sharing Langevin variants with caches small enough to fill within the test
+/// (so rounds pool, the caches freeze and the hybrid switches), pooled every 8 mutations per
+/// chain, under the paper-values and the code presets (fallback steps included).
+#[test]
+fn mala_cache_and_hybrid_with_short_rounds_and_full_caches_are_bit_identical() {
+    use render::methods::MalaSettings;
+    use render::mlt::mala::MalaVariant;
+    let scene = Scene::cornell_box(24, 16);
+    for base in [
+        MalaSettings::luan2020_values(),
+        MalaSettings::luan2020_code(),
+    ] {
+        for variant in [MalaVariant::Cache, MalaVariant::Hybrid] {
+            let with = |threads| {
+                let mut m = base;
+                m.config.variant = variant;
+                m.config.params.cache_size = 40;
+                m.config.cache_round = 8;
+                with_method(m.into(), 24, 16, threads, 17)
+            };
+            let reference = run(&scene, &with(1));
+            assert!(reference.mean_luminance() > 0.0, "{variant:?}");
+            for threads in [2, 3] {
+                assert!(
+                    bits(&run(&scene, &with(threads))) == bits(&reference),
+                    "{variant:?}: {threads} threads differ from 1"
+                );
+            }
+        }
+    }
+}

@@ -125,6 +125,9 @@ enum Method {
     Mala(MalaVariant),
     /// Delayed rejection, cheap (Gaussian) then expensive (MALA), on MMLT.
     CheapThenExpensive,
+    /// Langevin MLT under the paper-values preset (`MalaParams::luan2020_values`: the code's
+    /// semantics, fallback steps) with the given adaptation.
+    MalaValues(MalaVariant),
 }
 
 fn kernel(p: f64) -> Mh<PssmltProposal> {
@@ -208,6 +211,24 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             &NoProgress,
             &cancel,
         ),
+        Method::MalaValues(variant) => {
+            let p = render::mlt::mala::MalaParams::luan2020_values();
+            mala::render(
+                scene,
+                params,
+                &MalaConfig {
+                    variant,
+                    params: p.langevin,
+                    fallback: p.fallback,
+                    ..MalaConfig::default()
+                },
+                false,
+                settings,
+                SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap(),
+                &NoProgress,
+                &cancel,
+            )
+        }
         Method::CheapThenExpensive => mala::render(
             scene,
             params,
@@ -520,6 +541,14 @@ fn mala_variants_match_the_analytic_enclosure() {
     enclosure_case(Method::Mala(MalaVariant::Cache), 9200);
     enclosure_case(Method::Mala(MalaVariant::Hybrid), 9300);
     enclosure_case(Method::CheapThenExpensive, 9400);
+}
+
+#[test]
+fn mala_variants_under_the_paper_values_preset_match_the_analytic_enclosure() {
+    enclosure_case(Method::MalaValues(MalaVariant::Plain), 9050);
+    enclosure_case(Method::MalaValues(MalaVariant::Online), 9150);
+    enclosure_case(Method::MalaValues(MalaVariant::Cache), 9250);
+    enclosure_case(Method::MalaValues(MalaVariant::Hybrid), 9350);
 }
 
 #[test]
