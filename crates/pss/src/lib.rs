@@ -19,12 +19,12 @@
 //!
 //! # Example
 //!
-//! The whole outside-user program (`examples/custom_target.rs`; run it with
-//! `cargo run --release --example custom_target`): an analytic integrand rendered to a small
-//! image with PSSMLT and automatic large-step control, with DR orbital and with MALA.
+//! The whole outside-user program (`examples/pss_custom_target.rs`; run it with
+//! `cargo run --release -p pss --example pss_custom_target`): an analytic integrand rendered to
+//! a small image with PSSMLT and automatic large-step control, with DR orbital and with MALA.
 //! (Compiled here; its convergence tests run with the workspace tests.)
 //!
-#![doc = concat!("```rust,no_run\n", include_str!("../examples/custom_target.rs"), "\n```")]
+#![doc = concat!("```rust,no_run\n", include_str!("../examples/pss_custom_target.rs"), "\n```")]
 
 pub mod dr;
 mod error;
