@@ -49,8 +49,10 @@ pub trait LargeStepTunable {
 /// ([`crate::controller::RegionalScale`]) reads regions from, updates at synchronisation points
 /// and hands back to every chain.
 ///
-/// Writes are copy-on-write: a chain still holding the previous handle keeps the previous
-/// scales (e.g. an `Arc` and `Arc::make_mut`).
+/// The controller writes only at synchronisation points, when no chain is stepping, and hands
+/// the written handle to every chain before the next round. An implementation may copy on
+/// write (a chain still holding the previous handle keeps the previous scales, e.g. an `Arc`
+/// and `Arc::make_mut`) or write in place to scales all handles share (no copy per round).
 pub trait SharedRegionalScales: Clone {
     /// The partition the scales are over (a [`crate::Partition`] of the state space).
     type Partition;
@@ -60,7 +62,8 @@ pub trait SharedRegionalScales: Clone {
     fn num_regions(&self) -> usize;
     /// `lambda` of a region.
     fn log_scale_of(&self, region: usize) -> f64;
-    /// Sets `lambda` of a region (copying the scales first if another handle shares them).
+    /// Sets `lambda` of a region (in place, or copying the scales first if another handle
+    /// shares them).
     fn set_log_scale_of(&mut self, region: usize, lambda: f64);
     /// Splits a region, its children inheriting its scale (copying first if shared); returns
     /// the fresh ids of the children other than `region` itself (see

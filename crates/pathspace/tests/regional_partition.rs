@@ -212,6 +212,7 @@ fn quadtree_refinement_rules() {
         refine_every: 100,
         perturbation_component: Some(0),
         freeze_after_mutations: None,
+        ..RegionalAdaptParams::otsu2018()
     };
     let mut kernel = SharedSigmas::new(RegionalSigmas::new(part, 1.0, 1.0).unwrap());
     let mut c = SharedRegionalAdaptation::new(params).unwrap();
