@@ -4,8 +4,8 @@
 //! Each configuration is the paper's `PathMltSettings::otsu2018(perturbation, adapt)`: FIXED at
 //! `lambda = 1` (sigma = e^0.5 = 1.6487 rad) and every adaptive variant starting there, one sign
 //! step per `L` visits, `M_split`, `M_refine` from the pixel count; max depth 5. Besides them,
-//! chainlight's own "tuned FIXED" frontier: FIXED at each `--sweep` sigma (default 0.005, 0.01,
-//! 0.02, 0.05, 0.2 rad), for both perturbations. `--target-acceptance 0.8` is the paper's
+//! chainlight's own "tuned FIXED" frontier: FIXED at each `--sweep` sigma (default 0.005, 0.02,
+//! 0.1 rad), for both perturbations. `--target-acceptance 0.8` is the paper's
 //! Necklace setting (glossy scenes). Defaults: cornell, glossy-diffuse, ajar-door; 5 s per
 //! render (`--spp`: equal mutations), 5 seeds, 128 x 128, one thread.
 //!
@@ -42,15 +42,19 @@ struct Args {
     m_split: Option<u64>,
     /// The tuned-FIXED frontier: FIXED at each of these scales (radians, comma-separated;
     /// empty: none).
-    #[arg(long, value_name = "RAD,..", value_delimiter = ',', default_value = "0.005,0.01,0.02,0.05,0.2")]
+    #[arg(long, value_name = "RAD,..", value_delimiter = ',', default_value = "0.005,0.02,0.1")]
     sweep: Vec<f64>,
     /// The adaptive variants' target acceptance (the paper's 0.5; 0.8 for its Necklace).
     #[arg(long, value_name = "ALPHA", default_value_t = 0.5)]
     target_acceptance: f64,
+    /// Run only these configurations (slugs, comma-separated, e.g. `lens-grid,lens-fixed-0.02`):
+    /// one render per process, for the measurement lock.
+    #[arg(long, value_name = "SLUG,..", value_delimiter = ',')]
+    only: Vec<String>,
 }
 
 const LADDER: LadderDefaults = LadderDefaults {
-    scene: "cornell-glass",
+    scene: "ajar-door",
     seconds: &[1.0, 2.0, 5.0, 10.0, 20.0, 60.0],
     seeds: 5,
     first_seed: 0,
@@ -106,7 +110,18 @@ fn methods(args: &Args) -> Vec<Method> {
         let slug = format!("{k}-fixed-{sigma}");
         methods.push(method.with_slug(slug).with_baseline(format!("{k} FIXED")));
     }
+    if args.only.is_empty() {
+        return methods;
+    }
+    // One configuration per process: its own baseline.
     methods
+        .into_iter()
+        .filter(|m| args.only.contains(&m.slug().to_string()))
+        .map(|m| {
+            let name = m.name().to_string();
+            m.with_baseline(name)
+        })
+        .collect()
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
