@@ -42,7 +42,12 @@ struct Args {
     m_split: Option<u64>,
     /// The tuned-FIXED frontier: FIXED at each of these scales (radians, comma-separated;
     /// empty: none).
-    #[arg(long, value_name = "RAD,..", value_delimiter = ',', default_value = "0.005,0.02,0.1")]
+    #[arg(
+        long,
+        value_name = "RAD,..",
+        value_delimiter = ',',
+        default_value = "0.005,0.02,0.1"
+    )]
     sweep: Vec<f64>,
     /// The adaptive variants' target acceptance (the paper's 0.5; 0.8 for its Necklace).
     #[arg(long, value_name = "ALPHA", default_value_t = 0.5)]
@@ -136,7 +141,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let plan = args.common.plan(&defaults)?;
     let (first, size) = (plan.seeds[0], plan.size as usize);
     let (mut sigma, mut adapt) = (RunValues::default(), RunValues::default());
-    let m_split = args.m_split.map_or("pixel schedule".into(), |m| m.to_string());
+    let m_split = args
+        .m_split
+        .map_or("pixel schedule".into(), |m| m.to_string());
     let results = Experiment::new(plan.clone())
         .methods(methods(&args))
         .parameter("max depth", 5)

@@ -57,7 +57,7 @@ for p in "$@"; do
     case "$p" in
     overhead)
         f="$out/overhead.csv"
-        echo "scene,perturbation,adapt,mutations,seconds,mutations_per_second,regions" > "$f"
+        echo "scene,perturbation,adapt,mutations,cpu_seconds,mutations_per_cpu_second,regions,wall_seconds" > "$f"
         for rep in 1 2 3; do
             for k in lens multichain; do
                 for a in fixed global grid quadtree; do

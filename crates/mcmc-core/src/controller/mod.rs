@@ -13,10 +13,10 @@ pub use large_step::{
     automatic_large_step_probability, AutoLargeStep, LargeStepEstimate, LargeStepStats,
     FLATNESS_THRESHOLD, NOT_FLAT_LARGE_STEP_PROBABILITY,
 };
-pub use regional_pool::PooledRegionalScales;
 pub use regional_params::{
     RegionalScaleParams, RegionalUpdateRule, PIXELS_PER_LEAF, SPLIT_UPDATES,
 };
+pub use regional_pool::PooledRegionalScales;
 pub use regional_scale::{RegionStats, RegionalScale, MAX_VISITS_PER_ROUND, RECENT_WINDOW};
 pub use shared::{Both, SharedController};
 

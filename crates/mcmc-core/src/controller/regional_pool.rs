@@ -338,7 +338,7 @@ mod tests {
     fn sequential(rec: &[Vec<Vec<Visit>>]) -> (Vec<f64>, Vec<u64>) {
         let p = RegionalScaleParams::otsu2018().adapt;
         let mut lambda = vec![1.0; REGIONS];
-        let mut state = vec![AdaptState::new(); REGIONS];
+        let mut state = [AdaptState::new(); REGIONS];
         for v in rec.iter().flatten().flatten().filter(|v| v.perturbed) {
             let k = v.region as usize;
             if let Some(new) = state[k].record(v.accept, lambda[k], &p) {

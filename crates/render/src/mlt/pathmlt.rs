@@ -310,4 +310,3 @@ pub fn render_fixed(
     );
     Ok(out)
 }
-

@@ -70,7 +70,6 @@ pub const ADAPT_QUADTREE_DEPTH: u8 = 10;
 /// few steps per region.
 pub const ADAPT_ROUND_MUTATIONS: u64 = 2;
 
-
 /// The partition of pathmlt's regional adaptation.
 pub type AdaptPartition<'a> = PathPartition<&'a PathSpaceScene<'a>>;
 
@@ -82,7 +81,6 @@ pub type AdaptiveMutation<'a> = Mixture<
     >,
     PerturbOrGlobalPair,
 >;
-
 
 /// The regional-adaptation parameters of `--adapt` for `kind` of perturbation on a render of
 /// `settings`, starting at scale `sigma` (radians; `lambda_0 = log sigma^2`, the paper starts

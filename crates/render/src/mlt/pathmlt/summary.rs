@@ -95,8 +95,7 @@ impl AdaptSummary {
             };
             if r.proposals >= VISITED_PROPOSALS {
                 summary.visited += 1;
-                if (r.recent_acceptance - summary.target_acceptance).abs() <= ACCEPTANCE_TOLERANCE
-                {
+                if (r.recent_acceptance - summary.target_acceptance).abs() <= ACCEPTANCE_TOLERANCE {
                     summary.near_target += 1;
                 }
             }
