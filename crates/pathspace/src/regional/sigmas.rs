@@ -235,8 +235,9 @@ impl<P: Partition<Path>> ScaleSource for RegionalSigmas<P> {
 
 /// A [`RegionalSigmas`] behind an [`Arc`]: what every chain's perturbation holds. Chains read
 /// it without locks; the shared controller
-/// ([`crate::regional::SharedRegionalAdaptation`]) publishes a new one at each
-/// synchronisation point of the render loop. Cloning is cheap (a reference count).
+/// ([`crate::regional::SharedRegionalAdaptation`]) writes its `lambda`s in place at the
+/// synchronisation points of the render loop (all clones see them from the next round) and
+/// hands every chain a new handle only after a split. Cloning is cheap (a reference count).
 #[derive(Clone, Debug)]
 pub struct SharedSigmas<P>(Arc<RegionalSigmas<P>>);
 
