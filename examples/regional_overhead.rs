@@ -14,7 +14,8 @@
 //! does not count the time other processes held the core.
 //!
 //! `cargo run --release --example regional_overhead -- <scene> <lens|multichain>
-//! <fixed|global|grid|quadtree> [mutations per pixel, 100] [size, 64]` prints one CSV line:
+//! <fixed|global|grid|quadtree> [mutations per pixel, 100] [size, 64] [round mutations]` prints
+//! one CSV line:
 //! `scene,perturbation,adapt,mutations,cpu_seconds,mutations_per_cpu_second,regions,wall_seconds`.
 
 use std::sync::atomic::AtomicBool;
@@ -48,6 +49,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let mpp: f64 = args.get(3).map_or(Ok(100.0), |s| s.parse())?;
     let size: u32 = args.get(4).map_or(Ok(64), |s| s.parse())?;
+    let round: u64 = args
+        .get(5)
+        .map_or(Ok(ADAPT_ROUND_MUTATIONS), |s| s.parse())?;
     let (scene, _) = render::bundled::bundled(scene_name, size)?;
     let settings = MltSettings {
         width: size as usize,
@@ -68,7 +72,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         kind,
         adapt,
         sigma: PATHMLT_SIGMA,
-        round_mutations: ADAPT_ROUND_MUTATIONS,
+        round_mutations: round,
         max_depth: 5,
         params,
     };

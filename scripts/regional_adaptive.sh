@@ -11,6 +11,7 @@
 #             (the paper's Necklace setting); the 8 paper configurations
 #   sweep     5 s: FIXED at 0.005 0.02 0.1 rad, both perturbations, the same scenes
 #   ladder    ajar-door at 1 2 10 20 s (5 s comes from p5, 60 s from p60)
+#   t<N>      one rung: ajar-door at N s (e.g. t20)
 #   p60       ajar-door at 60 s
 #   collect   the tables (scripts/regional_adaptive_collect.py)
 # Every render is its own process; with LOCK set each runs under `flock $LOCK` (one render per
@@ -69,6 +70,7 @@ for p in "$@"; do
     sweep) phase 5 "cornell glossy-diffuse ajar-door" "$sweep_configs" ;;
     ladder) for s in 1 2 10 20; do phase "$s" ajar-door "$configs"; done ;;
     p60) phase 60 ajar-door "$configs" ;;
+    t[0-9]*) phase "${p#t}" ajar-door "$configs" ;;
     collect) python3 scripts/regional_adaptive_collect.py "$out" ;;
     *) echo "unknown phase $p"; exit 2 ;;
     esac

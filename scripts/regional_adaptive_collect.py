@@ -45,8 +45,8 @@ put = lines.append
 for secs in sorted({k[0] for k in runs}):
     for scene in sorted({k[1] for k in runs if k[0] == secs}):
         put(f"\n### {scene}, {secs:g} s\n")
-        put("| configuration | seeds | rRMSE median [min, max] | rRMSE / FIXED | Mmut/s | acceptance | near target (seed 0) | learned sigma median (seed 0) |")
-        put("|---|---|---|---|---|---|---|---|")
+        put("| configuration | seeds | rRMSE median [min, max] | rRMSE / FIXED | Mmut/s | load | acceptance | near target (seed 0) | learned sigma median (seed 0) |")
+        put("|---|---|---|---|---|---|---|---|---|")
         configs = sorted({k[2] for k in runs if k[0] == secs and k[1] == scene},
                          key=lambda c: (c.split("-")[0], [a for a, _ in ADAPTS].index(c.split("-")[1]) if c.count("-") == 1 else 9, c))
         for c in configs:
@@ -57,13 +57,14 @@ for secs in sorted({k[0] for k in runs}):
             ratio = med(v) / med(list(base.values())) if base else float("nan")
             mps = med([float(r["samples_per_second"]) for r in rows.values()]) / 1e6
             acc = med([float(r["acceptance"]) for r in rows.values()])
+            load = med([float(r["load1"]) for r in rows.values() if r.get("load1")])
             near, sig = notes.get((secs, scene, c, 0), (None, None)) or (None, None)
             near_s = f"{near[1]} of {near[2]} (target {near[0]})" if near else "-"
             sig_s = sig[1] if sig else "-"
             name = c if c.count("-") > 1 else f"{kind} {dict(ADAPTS)[c.split('-')[1]]}"
             if c.count("-") > 1:
                 name = f"{kind} FIXED {c.split('-', 2)[2]} rad (tuned sweep)"
-            put(f"| {name} | {len(v)} | {med(v):.4f} [{min(v):.4f}, {max(v):.4f}] | {ratio:.3f} | {mps:.2f} | {acc:.3f} | {near_s} | {sig_s} |")
+            put(f"| {name} | {len(v)} | {med(v):.4f} [{min(v):.4f}, {max(v):.4f}] | {ratio:.3f} | {mps:.2f} | {load:.1f} | {acc:.3f} | {near_s} | {sig_s} |")
         put("")
         for kind in KINDS:
             for a, b in CLAIMS:

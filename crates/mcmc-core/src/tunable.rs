@@ -71,6 +71,17 @@ pub trait SharedRegionalScales: Clone {
     fn split_region(&mut self, region: usize) -> Option<std::ops::Range<usize>>;
     /// True if both handles share the same scales (handing them over again is a no-op).
     fn same_as(&self, other: &Self) -> bool;
+    /// Starts recording the region of the first state this handle is asked about (the
+    /// proposal's current state) until the next call; returns false if the handle does not
+    /// record it (the default). Lets a controller that needs only the perturbation steps'
+    /// regions skip its own lookup ([`crate::controller::RegionalScale`]).
+    fn clear_region_hint(&self) -> bool {
+        false
+    }
+    /// The region recorded since [`Self::clear_region_hint`], if any.
+    fn region_hint(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// A kernel or proposal whose scales come from a [`SharedRegionalScales`] handle: how a shared

@@ -92,6 +92,8 @@ pub struct RegionalScale {
     params: RegionalScaleParams,
     visits: Vec<Visit>,
     current_region: usize,
+    /// The current step's region comes from the handle's hint ([`Self::observe`]).
+    hinted: bool,
     steps: u64,
     dropped: u64,
     frozen: bool,
@@ -108,6 +110,7 @@ impl RegionalScale {
             params,
             visits: Vec::new(),
             current_region: 0,
+            hinted: false,
             steps: 0,
             dropped: 0,
             frozen: params.freeze_after_mutations == Some(0),
@@ -134,6 +137,11 @@ impl RegionalScale {
 
     /// Before a step: notes the region of the current state `x` under `scales` (the kernel's
     /// handle, if it has one). What [`Controller::before_step`] does.
+    ///
+    /// Without refinement only the scaled proposal's steps need a region, and that proposal
+    /// looks up the region of `x` itself: if the handle records it
+    /// ([`SharedRegionalScales::clear_region_hint`]), the lookup is left to the proposal and
+    /// [`Self::record_from`] reads it back (the same region, one lookup fewer per step).
     pub fn observe<S, Sc>(&mut self, scales: Option<&Sc>, x: &S)
     where
         Sc: SharedRegionalScales,
@@ -143,24 +151,41 @@ impl RegionalScale {
             return;
         }
         if let Some(s) = scales {
-            self.current_region = s.partition().region(x);
+            self.hinted = self.params.split_after_visits.is_none() && s.clear_region_hint();
+            if !self.hinted {
+                self.current_region = s.partition().region(x);
+            }
         }
     }
 
-    /// After a step: records its visit and acceptance. What [`Controller::after_step`] does.
+    /// After a step: records its visit and acceptance, the region as [`Self::observe`] found
+    /// it. What [`Controller::after_step`] does.
     pub fn record(&mut self, info: &StepInfo) {
+        self.record_from::<NoScales>(None, info);
+    }
+
+    /// As [`Self::record`], reading the region from the handle's hint when [`Self::observe`]
+    /// left the lookup to the proposal. Steps of other proposals are then only counted (no
+    /// refinement needs their visits).
+    pub fn record_from<Sc: SharedRegionalScales>(&mut self, scales: Option<&Sc>, info: &StepInfo) {
         self.steps += 1;
         if self.frozen {
-            return;
-        }
-        if self.visits.len() >= MAX_VISITS_PER_ROUND {
-            self.dropped += 1;
             return;
         }
         let perturbed = self
             .params
             .perturbation_component
             .is_none_or(|c| c == info.component);
+        if self.hinted {
+            match scales.and_then(SharedRegionalScales::region_hint) {
+                Some(region) if perturbed => self.current_region = region,
+                _ => return,
+            }
+        }
+        if self.visits.len() >= MAX_VISITS_PER_ROUND {
+            self.dropped += 1;
+            return;
+        }
         self.visits.push(Visit {
             region: self.current_region as u32,
             perturbed,
@@ -210,8 +235,8 @@ where
         self.observe(kernel.shared_scales(), x);
     }
 
-    fn after_step(&mut self, _kernel: &mut K, info: &StepInfo) {
-        self.record(info);
+    fn after_step(&mut self, kernel: &mut K, info: &StepInfo) {
+        self.record_from(kernel.shared_scales(), info);
     }
 
     fn is_frozen(&self) -> bool {
@@ -305,5 +330,31 @@ mod tests {
             ..RegionalScaleParams::otsu2018()
         };
         assert!(RegionalScale::new(bad).is_err());
+    }
+}
+
+/// A handle type for [`RegionalScale::record`], which reads no handle.
+#[derive(Clone)]
+enum NoScales {}
+
+impl SharedRegionalScales for NoScales {
+    type Partition = ();
+    fn partition(&self) -> &() {
+        match *self {}
+    }
+    fn num_regions(&self) -> usize {
+        match *self {}
+    }
+    fn log_scale_of(&self, _region: usize) -> f64 {
+        match *self {}
+    }
+    fn set_log_scale_of(&mut self, _region: usize, _lambda: f64) {
+        match *self {}
+    }
+    fn split_region(&mut self, _region: usize) -> Option<std::ops::Range<usize>> {
+        match *self {}
+    }
+    fn same_as(&self, _other: &Self) -> bool {
+        match *self {}
     }
 }

@@ -91,8 +91,8 @@ where
         self.0.observe(kernel.shared_sigmas(), x);
     }
 
-    fn after_step(&mut self, _kernel: &mut K, info: &StepInfo) {
-        self.0.record(info);
+    fn after_step(&mut self, kernel: &mut K, info: &StepInfo) {
+        self.0.record_from(kernel.shared_sigmas(), info);
     }
 
     fn is_frozen(&self) -> bool {

@@ -46,11 +46,13 @@ pub struct RegionalSigmas<P> {
     /// Behind its own `Arc`: a copy of the scales (a split while chains hold them) shares the
     /// partition until it is refined.
     partition: Arc<P>,
-    /// `lambda_k` as `f64` bits. Atomics so that a [`SharedSigmas`] handle can write in place
-    /// at a synchronisation point while every chain's handle points at the same scales (no
-    /// copy of the array per round); chains only read them between synchronisation points,
-    /// so relaxed loads and stores suffice (the render loop's round boundary orders them).
-    lambdas: Vec<AtomicU64>,
+    /// `[lambda_k, sigma_k = e^{lambda_k / 2}]` as `f64` bits (the scale is kept so that a
+    /// proposal reads it without an `exp`). Atomics so that a [`SharedSigmas`] handle can write
+    /// in place at a synchronisation point while every chain's handle points at the same
+    /// scales (no copy of the array per round); chains only read them between
+    /// synchronisation points, so relaxed loads and stores suffice (the render loop's round
+    /// boundary orders them).
+    lambdas: Vec<[AtomicU64; 2]>,
     sigma_ratio: f64,
 }
 
@@ -61,11 +63,28 @@ impl<P> Clone for RegionalSigmas<P> {
             lambdas: self
                 .lambdas
                 .iter()
-                .map(|l| AtomicU64::new(l.load(Ordering::Relaxed)))
+                .map(|l| {
+                    l.each_ref()
+                        .map(|a| AtomicU64::new(a.load(Ordering::Relaxed)))
+                })
                 .collect(),
             sigma_ratio: self.sigma_ratio,
         }
     }
+}
+
+/// `sigma = e^{lambda / 2}` (Alg. 1 line 9).
+#[inline]
+fn sigma_of(lambda: f64) -> f64 {
+    (0.5 * lambda).exp()
+}
+
+/// A region's stored `[lambda, sigma]`.
+fn entry(lambda: f64) -> [AtomicU64; 2] {
+    [
+        AtomicU64::new(lambda.to_bits()),
+        AtomicU64::new(sigma_of(lambda).to_bits()),
+    ]
 }
 
 impl<P> RegionalSigmas<P> {
@@ -76,7 +95,7 @@ impl<P> RegionalSigmas<P> {
     #[must_use]
     #[inline]
     pub fn lambda(&self, region: usize) -> f64 {
-        f64::from_bits(self.lambdas[region].load(Ordering::Relaxed))
+        f64::from_bits(self.lambdas[region][0].load(Ordering::Relaxed))
     }
 
     /// `lambda_k` per region id (a copy, for diagnostics).
@@ -96,13 +115,15 @@ impl<P> RegionalSigmas<P> {
     /// # Panics
     /// If `region >= num_regions()`.
     pub fn set_lambda(&mut self, region: usize, lambda: f64) {
-        *self.lambdas[region].get_mut() = lambda.to_bits();
+        self.lambdas[region] = entry(lambda);
     }
 
     /// Sets `lambda` of a region through a shared reference: only at a synchronisation point,
     /// when no chain reads the scales.
     fn store_lambda(&self, region: usize, lambda: f64) {
-        self.lambdas[region].store(lambda.to_bits(), Ordering::Relaxed);
+        let [l, s] = &self.lambdas[region];
+        l.store(lambda.to_bits(), Ordering::Relaxed);
+        s.store(sigma_of(lambda).to_bits(), Ordering::Relaxed);
     }
 
     /// `sigma_2 / sigma_1`.
@@ -118,7 +139,7 @@ impl<P> RegionalSigmas<P> {
     #[must_use]
     #[inline]
     pub fn sigmas_of_region(&self, region: usize) -> [f64; 2] {
-        let s = (0.5 * self.lambda(region)).exp();
+        let s = f64::from_bits(self.lambdas[region][1].load(Ordering::Relaxed));
         [s, s * self.sigma_ratio]
     }
 }
@@ -136,7 +157,7 @@ impl<P: Partition<Path>> RegionalSigmas<P> {
         let n = partition.num_regions();
         Ok(Self {
             partition: Arc::new(partition),
-            lambdas: (0..n).map(|_| AtomicU64::new(lambda0.to_bits())).collect(),
+            lambdas: (0..n).map(|_| entry(lambda0)).collect(),
             sigma_ratio,
         })
     }
@@ -154,11 +175,11 @@ impl<P: Partition<Path>> RegionalSigmas<P> {
         P: Clone,
     {
         let fresh = Arc::make_mut(&mut self.partition).split(region)?;
-        let parent = self.lambda(region).to_bits();
+        let parent = self.lambda(region);
         self.lambdas
-            .resize_with(self.partition.num_regions(), || AtomicU64::new(parent));
+            .resize_with(self.partition.num_regions(), || entry(parent));
         for k in fresh.clone() {
-            *self.lambdas[k].get_mut() = parent;
+            self.lambdas[k] = entry(parent);
         }
         Some(fresh)
     }
@@ -238,19 +259,45 @@ impl<P: Partition<Path>> ScaleSource for RegionalSigmas<P> {
 /// ([`crate::regional::SharedRegionalAdaptation`]) writes its `lambda`s in place at the
 /// synchronisation points of the render loop (all clones see them from the next round) and
 /// hands every chain a new handle only after a split. Cloning is cheap (a reference count).
-#[derive(Clone, Debug)]
-pub struct SharedSigmas<P>(Arc<RegionalSigmas<P>>);
+///
+/// Each handle also records, on request of the controller, the region of the first path it is
+/// asked about (the perturbation's current state), so that the controller need not look it
+/// up again ([`SharedRegionalScales::clear_region_hint`]); the record is the handle's own,
+/// never shared.
+#[derive(Debug)]
+pub struct SharedSigmas<P> {
+    sigmas: Arc<RegionalSigmas<P>>,
+    /// `NO_HINT` (not recording), `WANT_HINT` (recording), or the recorded region.
+    hint: AtomicU64,
+}
+
+/// [`SharedSigmas::hint`]: not recording.
+const NO_HINT: u64 = u64::MAX;
+/// [`SharedSigmas::hint`]: recording the next region asked for.
+const WANT_HINT: u64 = u64::MAX - 1;
+
+impl<P> Clone for SharedSigmas<P> {
+    fn clone(&self) -> Self {
+        Self {
+            sigmas: Arc::clone(&self.sigmas),
+            hint: AtomicU64::new(NO_HINT),
+        }
+    }
+}
 
 impl<P> SharedSigmas<P> {
     /// Shares `sigmas`.
     pub fn new(sigmas: RegionalSigmas<P>) -> Self {
-        Self(Arc::new(sigmas))
+        Self {
+            sigmas: Arc::new(sigmas),
+            hint: AtomicU64::new(NO_HINT),
+        }
     }
 
     /// The scales.
     #[must_use]
     pub fn get(&self) -> &RegionalSigmas<P> {
-        &self.0
+        &self.sigmas
     }
 
     /// Mutable access, copying the scales first if another holder still shares them.
@@ -258,13 +305,13 @@ impl<P> SharedSigmas<P> {
     where
         P: Clone,
     {
-        Arc::make_mut(&mut self.0)
+        Arc::make_mut(&mut self.sigmas)
     }
 
     /// True if both share the same allocation.
     #[must_use]
     pub fn ptr_eq(&self, other: &Self) -> bool {
-        Arc::ptr_eq(&self.0, &other.0)
+        Arc::ptr_eq(&self.sigmas, &other.sigmas)
     }
 }
 
@@ -293,11 +340,23 @@ impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
     fn same_as(&self, other: &Self) -> bool {
         self.ptr_eq(other)
     }
+    fn clear_region_hint(&self) -> bool {
+        self.hint.store(WANT_HINT, Ordering::Relaxed);
+        true
+    }
+    fn region_hint(&self) -> Option<usize> {
+        let h = self.hint.load(Ordering::Relaxed);
+        (h < WANT_HINT).then_some(h as usize)
+    }
 }
 
 impl<P: Partition<Path>> ScaleSource for SharedSigmas<P> {
     fn sigmas(&self, x: &Path) -> [f64; 2] {
-        self.0.sigmas(x)
+        let region = self.sigmas.partition.region(x);
+        if self.hint.load(Ordering::Relaxed) == WANT_HINT {
+            self.hint.store(region as u64, Ordering::Relaxed);
+        }
+        self.sigmas.sigmas_of_region(region)
     }
 }
 
