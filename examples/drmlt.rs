@@ -48,6 +48,18 @@ struct Args {
     /// The calibration and the DR methods' acceptance per stage from one 16-mpp render each.
     #[arg(long)]
     stats_only: bool,
+    /// Step cost only: DR orbital against one-stage Kelemen on the same base (PSSMLT over
+    /// BDPT, PSSMLT over the path tracer, MMLT), no calibration, no toy; the table's
+    /// samples/s give the ratios.
+    #[arg(long)]
+    step_cost: bool,
+    /// One footing for every method (docs/methods/drmlt.md's required tables): DR orbital,
+    /// Tierney-Mira and Green-Mira over PSSMLT (BDPT), PSSMLT over the path tracer and MMLT
+    /// against PSSMLT/K, PSSMLT/G (both bases) and MMLT/K, all with the same direct pass
+    /// (16 samples per pixel, depths 0-1), the same normalisation per scene (the mean
+    /// luminance of `scenes/references/SCENE.exr`), large steps 0.3 without MIS.
+    #[arg(long)]
+    footing: bool,
 }
 
 /// `preset` at max depth 5.
@@ -92,6 +104,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if args.stats_only {
         (plan.regime, plan.seeds, plan.report) = (Regime::EqualSamples(16), vec![7], false);
     }
+    if args.step_cost {
+        return step_cost(plan);
+    }
+    let footing = args
+        .footing
+        .then(|| Footing::for_scenes(&plan.scenes))
+        .transpose()?;
     let cases = experiments::load_bundled(&plan.scenes, plan.size);
     let mut probe = at_depth_5(MethodSettings::default());
     (probe.budget, probe.threads, probe.seed) = (Budget::SamplesPerPixel(16), plan.threads, 7);
@@ -117,6 +136,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             dr.push(name);
         }
     }
+    if let Some(footing) = &footing {
+        (methods, dr) = footing.methods(&fits);
+    }
     methods.retain(|m| !args.stats_only || dr.contains(&m.name().to_owned()));
     let errors = TableSpec::errors([Measure::RelMse, Measure::Mad]).with(Column::step_cost());
     let errors = errors.with(Column::ratio(Measure::RelMse));
@@ -136,6 +158,170 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let calibration = fits.table("PSSMLT/G sigma").to_markdown();
     let extra = format!("## PSSMLT/G: sigma matched to DR orbital's acceptance on PSSMLT (16 mpp, seed 7)\n\n{calibration}{toy}");
     results.write_with(&tables[usize::from(args.stats_only)..], &extra)?;
+    Ok(())
+}
+
+/// A method's settings per scene.
+type MakeMethod = std::sync::Arc<dyn Fn(&str) -> MethodSettings + Send + Sync>;
+
+/// `--footing`: the per-scene normalisation and the shared settings of every method.
+struct Footing {
+    /// The mean luminance of each scene's reference.
+    b: std::collections::HashMap<String, f64>,
+}
+
+impl Footing {
+    /// The normalisations of `scenes` from their references.
+    fn for_scenes(scenes: &[String]) -> Result<Self, Box<dyn std::error::Error>> {
+        let mut b = std::collections::HashMap::new();
+        for scene in scenes {
+            let path = format!("scenes/references/{scene}.exr");
+            let image = render::image_io::read_exr(&path).map_err(|e| format!("{path}: {e}"))?;
+            b.insert(scene.clone(), image.mean_luminance());
+        }
+        Ok(Self { b })
+    }
+
+    /// `method` at max depth 5 on the footing of `scene`: the direct pass, the given b,
+    /// large steps 0.3 without MIS.
+    fn apply(&self, scene: &str, method: MethodSettings) -> RenderSettings {
+        use mcmc_core::render_loop::NormalizationMode;
+        use render::methods::direct_pass::DirectSettings;
+        use render::mlt::direct::DirectPass;
+        let pass = DirectSettings {
+            pass: DirectPass::Fixed(16),
+            depth: 1,
+            ..DirectSettings::OFF
+        };
+        let given = NormalizationMode::Given(self.b.get(scene).copied().unwrap_or(1.0));
+        let mut method = method;
+        match &mut method {
+            MethodSettings::Pssmlt(s) => {
+                (s.direct, s.direct_depth, s.sampler) = (pass.pass, pass.depth, pass.sampler);
+                (s.large_step_mis, s.chain.normalization) = (false, given);
+            }
+            MethodSettings::Mmlt(s) => {
+                (s.direct, s.large_step_mis, s.chain.normalization) = (pass, false, given);
+            }
+            MethodSettings::Drmlt(s) => {
+                (s.direct, s.large_step_mis, s.chain.normalization) = (pass, false, given);
+            }
+            _ => {}
+        }
+        at_depth_5(method)
+    }
+
+    /// The methods of the footing tables and the DR ones among them, PSSMLT/G's sigma from
+    /// `fits` per scene.
+    fn methods(&self, fits: &experiments::Calibrations) -> (Vec<Method>, Vec<String>) {
+        let pt = render::methods::PathBase::Pt;
+        let mut one_stage: Vec<(String, String, MakeMethod)> = Vec::new();
+        let sigma = fits.clone();
+        let sigma_pt = fits.clone();
+        one_stage.push((
+            "PSSMLT/K".into(),
+            "pssmlt-k".into(),
+            std::sync::Arc::new(|_: &str| PssmltSettings::kelemen2002().into()),
+        ));
+        one_stage.push((
+            "PSSMLT/G".into(),
+            "pssmlt-g".into(),
+            std::sync::Arc::new(move |sc: &str| gaussian(sigma.value(sc))),
+        ));
+        one_stage.push((
+            "PSSMLT-PT/K".into(),
+            "pssmlt-pt-k".into(),
+            std::sync::Arc::new(move |_: &str| PssmltSettings::kelemen2002().on(pt).into()),
+        ));
+        one_stage.push((
+            "PSSMLT-PT/G".into(),
+            "pssmlt-pt-g".into(),
+            std::sync::Arc::new(move |sc: &str| {
+                let mut s = PssmltSettings::kelemen2002().on(pt);
+                s.chain.small_step = SmallMutation::Gaussian {
+                    sigma: sigma_pt.value(sc),
+                };
+                s.into()
+            }),
+        ));
+        one_stage.push((
+            "MMLT/K".into(),
+            "mmlt-k".into(),
+            std::sync::Arc::new(|_: &str| MmltSettings::hachisuka2014().into()),
+        ));
+        let mut dr = Vec::new();
+        for (base, on) in [
+            (DrBase::Pssmlt, "pssmlt"),
+            (DrBase::PssmltPt, "pssmlt-pt"),
+            (DrBase::Mmlt, "mmlt"),
+        ] {
+            for &(rule, variant) in &DrVariant::ALL[..3] {
+                let name = format!("DR {rule} on {}", on.to_uppercase());
+                let slug = format!("dr-{rule}-{on}");
+                one_stage.push((
+                    name.clone(),
+                    slug,
+                    std::sync::Arc::new(move |_: &str| {
+                        DrmltSettings::rioux_lavoie2020_with(variant, base).into()
+                    }),
+                ));
+                dr.push(name);
+            }
+        }
+        let methods = one_stage
+            .into_iter()
+            .map(|(name, slug, make)| {
+                let b = self.b.clone();
+                let footing = Footing { b };
+                Method::from_fn(&name, move |c: &RunContext| {
+                    footing.apply(c.scene, make(c.scene))
+                })
+                .with_slug(&slug)
+            })
+            .collect();
+        (methods, dr)
+    }
+}
+
+/// `--step-cost`: DR orbital and one-stage Kelemen (PSSMLT/K's small step, large steps 0.3,
+/// plain estimator, no direct pass) on each base, interleaved per seed.
+fn step_cost(plan: experiments::Plan) -> Result<(), Box<dyn std::error::Error>> {
+    let cases = experiments::load_bundled(&plan.scenes, plan.size);
+    let pt = PssmltSettings::kelemen2002().on(render::methods::PathBase::Pt);
+    let dr = DrmltSettings::rioux_lavoie2020_with;
+    let methods = vec![
+        method("PSSMLT/K", "pssmlt-k", PssmltSettings::kelemen2002()),
+        method(
+            "DR orbital on PSSMLT",
+            "dr-pssmlt",
+            dr(DrVariant::Orbital, DrBase::Pssmlt),
+        ),
+        method("PSSMLT-PT/K", "pssmlt-pt-k", pt),
+        method(
+            "DR orbital on PSSMLT-PT",
+            "dr-pssmlt-pt",
+            dr(DrVariant::Orbital, DrBase::PssmltPt),
+        ),
+        method("MMLT/K", "mmlt-k", MmltSettings::hachisuka2014()),
+        method(
+            "DR orbital on MMLT",
+            "dr-mmlt",
+            dr(DrVariant::Orbital, DrBase::Mmlt),
+        ),
+    ];
+    let table = TableSpec::errors([Measure::RelMse]).with(Column::step_cost());
+    let Some(results) = Experiment::new(plan)
+        .methods(methods)
+        .baseline("PSSMLT/K")
+        .scenes(cases)
+        .parameter("max depth", 5)
+        .parameter("chains", 256)
+        .parameter("large-step probability", 0.3)
+        .execute()?
+    else {
+        return Ok(());
+    };
+    results.write_with(&[table], "")?;
     Ok(())
 }
 

@@ -60,7 +60,11 @@ fn bad_flags_are_rejected_with_the_flag_named() {
             "--mala-gradient",
             "reverse",
         ],
-        &["--mala-gradient", "expected dual or fd", "reverse"],
+        &[
+            "--mala-gradient",
+            "expected dual, dual-constant-mis or fd",
+            "reverse",
+        ],
     );
     assert_fails_with(
         &[

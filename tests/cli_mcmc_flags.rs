@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{assert_fails_with, chainlight, path_str, stderr, stdout, temp_dir};
+use common::{assert_fails_with, chainlight, path_str, stderr, stdout, temp_dir, tiny_render};
 use render::image_io::read_exr;
 
 /// `--dr-variant` / `--dr-on`: every variant renders on both samplers; bad values name the
@@ -79,7 +79,7 @@ fn drmlt_flags() {
             "-o",
             path_str(&out),
         ],
-        &["--dr-on", "pssmlt or mmlt"],
+        &["--dr-on", "pssmlt, pssmlt-pt or mmlt"],
     );
 }
 
@@ -97,29 +97,11 @@ fn large_step_mis_defaults_per_integrator_and_can_be_set() {
         ("drmlt", None, false),
         ("drmlt", Some("on"), true),
     ] {
-        let mut args = vec![
-            "render",
-            "--integrator",
-            integrator,
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--spp",
-            "2",
-            "--bootstrap-samples",
-            "2000",
-            "--chains",
-            "16",
-            "-o",
-            path_str(&out),
-        ];
-        if let Some(value) = flag {
-            args.extend(["--large-step-mis", value]);
-        }
-        let output = chainlight(&args);
-        assert!(output.status.success(), "{}", stderr(&output));
-        let text = format!("{}{}", stdout(&output), stderr(&output));
+        let extra: &[&str] = match flag {
+            Some(value) => &["--large-step-mis", value],
+            None => &[],
+        };
+        let text = tiny_render(&out, integrator, extra);
         assert_eq!(
             text.contains("large-step MIS"),
             expect_on,
@@ -143,29 +125,11 @@ fn raster_mutation_flag_sets_the_probability() {
         ("mmlt", None, None),
         ("mmlt", Some("on"), Some("raster mutation: 0.5 ")),
     ] {
-        let mut args = vec![
-            "render",
-            "--integrator",
-            integrator,
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--spp",
-            "2",
-            "--bootstrap-samples",
-            "2000",
-            "--chains",
-            "16",
-            "-o",
-            path_str(&out),
-        ];
-        if let Some(value) = flag {
-            args.extend(["--raster-mutation", value]);
-        }
-        let output = chainlight(&args);
-        assert!(output.status.success(), "{}", stderr(&output));
-        let text = format!("{}{}", stdout(&output), stderr(&output));
+        let extra: &[&str] = match flag {
+            Some(value) => &["--raster-mutation", value],
+            None => &[],
+        };
+        let text = tiny_render(&out, integrator, extra);
         match expect {
             Some(note) => assert!(text.contains(note), "{integrator} {flag:?}: {text}"),
             None => assert!(!text.contains("raster mutation"), "{flag:?}: {text}"),
@@ -292,24 +256,7 @@ fn roulette_small_step_and_direct_pass_flags() {
             true,
         ),
     ] {
-        let mut args = vec![
-            "render",
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--spp",
-            "2",
-            "-o",
-            path_str(&out),
-        ];
-        if extra[1] != "bdpt" {
-            args.extend(["--bootstrap-samples", "2000", "--chains", "16"]);
-        }
-        args.extend_from_slice(extra);
-        let output = chainlight(&args);
-        assert!(output.status.success(), "{extra:?}: {}", stderr(&output));
-        let text = format!("{}{}", stdout(&output), stderr(&output));
+        let text = tiny_render(&out, extra[1], &extra[2..]);
         assert_eq!(
             text.contains("direct-lighting pass"),
             direct,
@@ -411,11 +358,11 @@ fn flags_without_effect_are_errors_naming_where_they_apply() {
     let out = dir.join("x.exr");
     for (args, needles) in [
         (
-            &["--integrator", "drmlt", "--direct-samples", "4"][..],
+            &["--integrator", "drmlt", "--dr-fixed-strategy"][..],
             &[
-                "--direct-samples",
+                "--dr-fixed-strategy",
                 "--integrator drmlt",
-                "applies to: pssmlt",
+                "drmlt with --dr-on mmlt and --dr-variant orbital",
             ][..],
         ),
         (

@@ -58,6 +58,7 @@ fn drmlt_langevin(m: &MethodSettings) -> bool {
 /// tracer, MMLT, Langevin MLT).
 fn has_direct_pass(m: &MethodSettings) -> bool {
     matches!(m, M::Pssmlt(_) | M::Mmlt(_) | M::Mala(_))
+        || (m.kind() == K::Drmlt && !drmlt_langevin(m))
 }
 
 /// A chain method with its direct-lighting pass on.
@@ -66,6 +67,7 @@ fn direct_pass_on(m: &MethodSettings) -> bool {
         M::Pssmlt(s) => s.direct,
         M::Mmlt(s) => s.direct.pass,
         M::Mala(s) => s.direct.pass,
+        M::Drmlt(s) if !drmlt_langevin(m) => s.direct.pass,
         _ => return false,
     };
     !matches!(pass, DirectPass::Off | DirectPass::Fixed(0))
@@ -150,7 +152,7 @@ pub(crate) const RULES: &[FlagRule] = &[
             // The all-strategy BDPT samples of the depth normalisation; MMLT's own paths have
             // a fixed length.
             M::Mmlt(s) => s.bdpt_normalization > 0,
-            M::Drmlt(s) => s.on == DrBase::Pssmlt && !drmlt_langevin(m),
+            M::Drmlt(s) => s.on != DrBase::Mmlt && !drmlt_langevin(m),
             _ => false,
         },
         also: "mmlt with --bdpt-normalization N > 0; not drmlt with --dr-on mmlt or \
@@ -177,6 +179,11 @@ pub(crate) const RULES: &[FlagRule] = &[
         also: "not with --dr-variant cheap-then-expensive (always on MMLT)",
     },
     FlagRule {
+        id: "dr_fixed_strategy",
+        applies: |m| matches!(m, M::Drmlt(s) if s.on == DrBase::Mmlt && s.variant == DrVariant::Orbital),
+        also: "drmlt with --dr-on mmlt and --dr-variant orbital",
+    },
+    FlagRule {
         id: "perturbation",
         applies: |m| m.kind() == K::PathMlt,
         also: "",
@@ -200,6 +207,11 @@ pub(crate) const RULES: &[FlagRule] = &[
         id: "mala_preset",
         applies: |m| matches!(m, M::Mala(_)) || drmlt_langevin(m),
         also: "drmlt with --dr-variant cheap-then-expensive",
+    },
+    FlagRule {
+        id: "mala_kernel",
+        applies: |m| matches!(m, M::Mala(_)),
+        also: "",
     },
     FlagRule {
         id: "mala_max_depth",
@@ -277,12 +289,14 @@ mod tests {
         ("sampler", Some(["independent", "sobol"])),
         ("strategy_images", None),
         ("dr_variant", Some(["green-mira", "tierney-mira"])),
-        ("dr_on", Some(["mmlt", "pssmlt"])),
+        ("dr_on", Some(["mmlt", "pssmlt-pt"])),
+        ("dr_fixed_strategy", None),
         ("perturbation", Some(["lens", "multichain"])),
         ("adapt", Some(["global", "grid"])),
         ("sigma", Some(["paper", "0.1"])),
         ("target_acceptance", Some(["0.8", "0.3"])),
-        ("mala_preset", Some(["paper", "code"])),
+        ("mala_preset", Some(["paper", "paper-values"])),
+        ("mala_kernel", Some(["mala", "cheap-then-expensive"])),
         ("mala_max_depth", Some(["2", "4"])),
         ("mala_gradient", Some(["dual", "fd"])),
         ("lqmc_preset", Some(["code", "paper"])),
@@ -310,7 +324,9 @@ mod tests {
             "raster_mutation" => vec!["pssmlt", "pssmlt-pt", "mmlt"],
             "chain_allocation" | "strategy_strata" | "bdpt_normalization" => vec!["mmlt"],
             // mmlt's pass is off by default: giving it samples or a share turns it on.
-            "direct_samples" | "direct_share" => with(MALA, &["pssmlt", "pssmlt-pt", "mmlt"]),
+            "direct_samples" | "direct_share" => {
+                with(MALA, &["pssmlt", "pssmlt-pt", "mmlt", "drmlt"])
+            }
             "direct_depth" => with(MALA, &["pssmlt", "pssmlt-pt"]),
             // drmlt's default rule (orbital) has its own second-stage kernel.
             "small_step" => with(MALA, &["pssmlt", "pssmlt-pt", "mmlt"]),
@@ -327,8 +343,10 @@ mod tests {
             "sampler" => with(MALA, &["pt", "bdpt", "pssmlt", "pssmlt-pt"]),
             "strategy_images" => vec!["bdpt"],
             "dr_variant" | "dr_on" => vec!["drmlt"],
+            // Only with --dr-on mmlt (not drmlt's default sampler).
+            "dr_fixed_strategy" => vec![],
             "perturbation" | "adapt" | "sigma" | "target_acceptance" => vec!["pathmlt"],
-            "mala_preset" | "mala_max_depth" | "mala_gradient" => MALA.to_vec(),
+            "mala_preset" | "mala_max_depth" | "mala_gradient" | "mala_kernel" => MALA.to_vec(),
             "lqmc_preset" => vec!["lqmc"],
             other => panic!("no expectation for {other}"),
         }
@@ -464,6 +482,24 @@ mod tests {
                 false,
             ),
             ("drmlt", &["--dr-on", "mmlt", "--roulette", "2"], false),
+            ("drmlt", &["--dr-on", "mmlt", "--dr-fixed-strategy"], true),
+            (
+                "drmlt",
+                &[
+                    "--dr-on",
+                    "mmlt",
+                    "--dr-variant",
+                    "green-mira",
+                    "--dr-fixed-strategy",
+                ],
+                false,
+            ),
+            ("drmlt", &["--dr-on", "pssmlt-pt", "--roulette", "2"], true),
+            (
+                "drmlt",
+                &["--direct-samples", "4", "--direct-depth", "2"],
+                true,
+            ),
             ("drmlt", &["--dr-on", "pssmlt", "--roulette", "2"], true),
             (
                 "mmlt",

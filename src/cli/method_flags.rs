@@ -113,9 +113,14 @@ pub(crate) struct MethodFlags {
     /// `cheap-then-expensive` (Gaussian first stage, MALA second stage, Green-Mira; on MMLT).
     #[arg(long, value_name = "RULE", default_value = "orbital", value_parser = parse::dr_variant)]
     pub(crate) dr_variant: DrVariant,
-    /// drmlt: the path sampler, `pssmlt` or `mmlt` (second stage on the camera subpath only).
-    #[arg(long, value_name = "pssmlt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
+    /// drmlt: the path sampler, `pssmlt` (over BDPT), `pssmlt-pt` (over the path tracer) or
+    /// `mmlt` (second stage on the camera subpath only).
+    #[arg(long, value_name = "pssmlt|pssmlt-pt|mmlt", default_value = "pssmlt", value_parser = parse::dr_on)]
     pub(crate) dr_on: DrBase,
+    /// drmlt with `--dr-on mmlt` and the orbital rule: keep MMLT's strategy along the chain
+    /// in both stages (the paper's chain; large steps still draw it afresh).
+    #[arg(long)]
+    pub(crate) dr_fixed_strategy: bool,
     /// pathmlt: the perturbation mixed with the bidirectional mutation (0.5 each, RA paper
     /// section 8.1), `lens` or `multichain`.
     #[arg(long, value_name = "lens|multichain", default_value = "lens", value_parser = parse::perturbation)]
@@ -135,20 +140,28 @@ pub(crate) struct MethodFlags {
     /// its glossy Necklace scene).
     #[arg(long, value_name = "ALPHA", default_value_t = 0.5)]
     pub(crate) target_acceptance: f64,
-    /// mala*: parameter preset, `paper` (Luan et al. 2020, section 7: epsilon 0.01, K 30,
-    /// H 10000) or `code` (the authors' code: epsilon 0.005, K 5, H 3000, preconditioner
-    /// clamped to [0.01, 100], shrink prior 0.005).
-    #[arg(long, value_name = "paper|code", default_value = "paper", value_parser = parse::mala_preset)]
-    pub(crate) mala_preset: mcmc_core::langevin::LangevinParams,
+    /// mala*: parameter preset, `paper` (Luan et al. 2020's text, section 7: epsilon 0.01 as
+    /// the variance of eq. 7, K 30, H 10000), `paper-values` (those values with the authors'
+    /// code's semantics: covariance epsilon^2 (M + 1), M in [0.01, 100], drift clamp 5, radius
+    /// 0.01 sqrt(d), first-visit Adam start, fallback step 0.1) or `code` (the authors' code:
+    /// epsilon 0.005, shrink prior 0.005, K 5, H 3000, otherwise as `paper-values`).
+    #[arg(long, value_name = "paper|paper-values|code", default_value = "paper", value_parser = parse::mala_preset)]
+    pub(crate) mala_preset: render::mlt::mala::MalaParams,
     /// mala*: chains of MMLT depth up to D run MALA, deeper ones the Kelemen small step,
     /// 0..=1024.
     #[arg(long, allow_negative_numbers = true, value_name = "D", default_value_t = 3,
           value_parser = clap::value_parser!(u32).range(0..=1024))]
     pub(crate) mala_max_depth: u32,
+    /// mala*: the kernel of the Langevin chains, `mala` (the variant's MALA) or
+    /// `cheap-then-expensive` (the DR paper's section 5.2: an isotropic Gaussian of sigma 1/64,
+    /// then plain MALA), with the same direct pass, chains and large steps.
+    #[arg(long, value_name = "mala|cheap-then-expensive", default_value = "mala", value_parser = parse::mala_kernel)]
+    pub(crate) mala_kernel: parse::CheapThenExpensive,
     /// mala*: gradient of the log contribution, `dual` (forward-mode dual numbers through the
-    /// differentiable path evaluator; finite differences where it does not apply) or `fd`
-    /// (central finite differences of the f32 renderer).
-    #[arg(long, value_name = "dual|fd", default_value = "dual", value_parser = parse::mala_gradient)]
+    /// differentiable path evaluator; finite differences where it does not apply),
+    /// `dual-constant-mis` (the same with the MIS weight held constant) or `fd` (central
+    /// finite differences of the f32 renderer).
+    #[arg(long, value_name = "dual|dual-constant-mis|fd", default_value = "dual", value_parser = parse::mala_gradient)]
     pub(crate) mala_gradient: render::mlt::mala::GradientMethod,
     /// lqmc: parameter preset, `paper` (Tessari et al. 2020: NEE paths that are neither
     /// caustic nor out of focus splatted unexplored) or `code` (the authors' code: those NEE
@@ -251,14 +264,18 @@ impl MethodFlags {
                 s.variant = self.dr_variant;
                 s.on = self.dr_on;
                 s.large_step_mis = self.large_step_mis.unwrap_or(s.large_step_mis);
-                s.mala.params = self.mala_preset;
+                s.mala.params = self.mala_preset.langevin;
                 s.mala.max_depth = self.mala_max_depth;
                 s.mala.gradient = self.mala_gradient;
                 s.roulette = self.roulette.unwrap_or(s.roulette);
+                s.direct = self.direct(s.direct);
+                s.fixed_strategy = self.dr_fixed_strategy;
             }
             MethodSettings::Mala(s) => {
                 s.chain = self.chain();
-                s.config.params = self.mala_preset;
+                s.config.params = self.mala_preset.langevin;
+                s.config.fallback = self.mala_preset.fallback;
+                s.cheap_then_expensive = self.mala_kernel.0;
                 s.config.max_depth = self.mala_max_depth;
                 s.config.gradient = self.mala_gradient;
                 s.direct = self.direct(s.direct);

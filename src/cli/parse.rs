@@ -254,13 +254,17 @@ pub(crate) fn dr_variant(text: &str) -> Result<render::mlt::dr::DrVariant, Strin
         })
 }
 
-/// Parses `--mala-preset`.
-pub(crate) fn mala_preset(text: &str) -> Result<mcmc_core::langevin::LangevinParams, String> {
-    use mcmc_core::langevin::LangevinParams;
+/// Parses `--mala-preset`: `paper` (the paper's text), `paper-values` (its values with the
+/// authors' code's semantics) or `code` (the authors' code).
+pub(crate) fn mala_preset(text: &str) -> Result<render::mlt::mala::MalaParams, String> {
+    use render::mlt::mala::MalaParams;
     match text.trim().to_ascii_lowercase().as_str() {
-        "paper" => Ok(LangevinParams::luan2020()),
-        "code" => Ok(LangevinParams::luan2020_code()),
-        _ => Err(format!("expected paper or code, got '{text}'")),
+        "paper" => Ok(MalaParams::luan2020()),
+        "paper-values" => Ok(MalaParams::luan2020_values()),
+        "code" => Ok(MalaParams::luan2020_code()),
+        _ => Err(format!(
+            "expected paper, paper-values or code, got '{text}'"
+        )),
     }
 }
 
@@ -316,7 +320,22 @@ pub(crate) fn mala_gradient(text: &str) -> Result<render::mlt::mala::GradientMet
         .iter()
         .find(|(name, _)| *name == t)
         .map(|(_, m)| *m)
-        .ok_or_else(|| format!("expected dual or fd, got '{text}'"))
+        .ok_or_else(|| format!("expected dual, dual-constant-mis or fd, got '{text}'"))
+}
+
+/// `--mala-kernel`: true for `cheap-then-expensive`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct CheapThenExpensive(pub(crate) bool);
+
+/// Parses `--mala-kernel`.
+pub(crate) fn mala_kernel(text: &str) -> Result<CheapThenExpensive, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "mala" => Ok(CheapThenExpensive(false)),
+        "cheap-then-expensive" => Ok(CheapThenExpensive(true)),
+        _ => Err(format!(
+            "expected mala or cheap-then-expensive, got '{text}'"
+        )),
+    }
 }
 
 /// Parses `--perturbation`.
@@ -362,8 +381,9 @@ pub(crate) fn adapt(text: &str) -> Result<render::mlt::pathmlt::PathAdapt, Strin
 pub(crate) fn dr_on(text: &str) -> Result<render::mlt::dr::DrBase, String> {
     match text.trim().to_ascii_lowercase().as_str() {
         "pssmlt" => Ok(render::mlt::dr::DrBase::Pssmlt),
+        "pssmlt-pt" => Ok(render::mlt::dr::DrBase::PssmltPt),
         "mmlt" => Ok(render::mlt::dr::DrBase::Mmlt),
-        _ => Err(format!("expected pssmlt or mmlt, got '{text}'")),
+        _ => Err(format!("expected pssmlt, pssmlt-pt or mmlt, got '{text}'")),
     }
 }
 

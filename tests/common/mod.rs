@@ -36,6 +36,36 @@ pub fn path_str(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Renders the default scene at 16 x 16, 2 samples (mutations) per pixel with `integrator`
+/// (MCMC integrators also get a 2000-sample bootstrap and 16 chains), writes `out`, appends
+/// `extra`, and asserts success; returns the summary and the log (stdout then stderr).
+pub fn tiny_render(out: &Path, integrator: &str, extra: &[&str]) -> String {
+    let mut args = vec![
+        "render",
+        "--integrator",
+        integrator,
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "2",
+        "-o",
+        path_str(out),
+    ];
+    if !matches!(integrator, "bdpt" | "pt" | "qmc" | "lqmc") {
+        args.extend(["--bootstrap-samples", "2000", "--chains", "16"]);
+    }
+    args.extend_from_slice(extra);
+    let output = chainlight(&args);
+    assert!(
+        output.status.success(),
+        "{integrator} {extra:?}: {}",
+        stderr(&output)
+    );
+    format!("{}{}", stdout(&output), stderr(&output))
+}
+
 /// Asserts a non-zero exit whose stderr contains every `needle`.
 pub fn assert_fails_with(args: &[&str], needles: &[&str]) {
     let output = chainlight(args);

@@ -7,7 +7,9 @@
 //! mixture terms are component-labelled, docs/methods/drmlt.md):
 //! - [`orbital_kernel`] (section 4.4, eq. 11): a pairwise polar Kelemen first stage (radii
 //!   x 1.9, the authors' preset [`PairwiseKelemenParams::drmlt2020`]) and the orbital second
-//!   stage (wrapped Cauchy, rho = exp(-1/4));
+//!   stage (wrapped Cauchy, rho = exp(-1/4)); [`lazy_orbital_kernel`] is the same rule on
+//!   every pair of every stream, computed only where the target reads
+//!   ([`crate::lazy_pairs`]: no layout, the cost of what a path reads);
 //! - [`tierney_mira_kernel`] (eq. 6-7) and [`green_mira_kernel`] (eq. 12-14, the fictional
 //!   state `y* = z - (y - x)` on the torus, [`LayoutGhost`]) as the authors run them (Fig. 7):
 //!   a 1-D Kelemen first stage (eq. 9, `[1/1024, 1/64]`, every coordinate of the layout
@@ -42,6 +44,7 @@ use mcmc_core::proposal::ConditionalProposal;
 use mcmc_core::{DelayedRejection, Proposed};
 use rand::Rng;
 
+use crate::lazy_pairs::{LazyOrbital, LazyPairParams, LazyPairwise};
 use crate::on_layout::{LayoutGhost, OnLayout, PairwiseMltProposal};
 use crate::orbital::Orbital;
 use crate::pairwise::{PairLayout, PairwiseKelemen, PairwiseKelemenParams};
@@ -262,6 +265,42 @@ pub fn orbital_kernel<C>(
 ) -> DelayedRejection<PairwiseMltProposal, ByState<OnLayout<Orbital>, C>> {
     let second = streams.stages(|mask| orbital_stage(layout, mask));
     DelayedRejection::orbital(first_stage(layout, p_large), second).second_stage_after_small_steps()
+}
+
+/// The lazy bold first stage: a large step with probability `p_large` (clamped to
+/// `[0, 1]`), else the pairwise polar Kelemen step on every pair of every stream, computed
+/// pair by pair as the target reads ([`LazyPairwise`], the authors' radii).
+#[must_use]
+pub fn lazy_first_stage(p_large: f64) -> PairwiseMltProposal<LazyPairwise> {
+    PairwiseMltProposal::new(LazyPairwise::default(), p_large.clamp(0.0, 1.0))
+        .unwrap_or_else(|_| unreachable!("clamped"))
+}
+
+/// The orbital kernel at the cost of what the target reads (DR paper section 4.4, eq. 11;
+/// [`crate::lazy_pairs`]): [`lazy_first_stage`], then the lazy orbital stage
+/// ([`LazyOrbital`]) on the streams of `streams` after a rejected small step. The same chain
+/// as [`orbital_kernel`] on an unbounded layout (no lone coordinates), with no layout to
+/// choose: every pair of every stream moves, and each costs only when a path reads it.
+#[must_use]
+pub fn lazy_orbital_kernel<C>(
+    p_large: f64,
+    streams: SecondStageStreams<C>,
+) -> DelayedRejection<PairwiseMltProposal<LazyPairwise>, ByState<LazyOrbital, C>> {
+    lazy_orbital_kernel_with(LazyPairParams::default(), p_large, streams)
+}
+
+/// [`lazy_orbital_kernel`] with the laws and kept first numbers of `params` (both stages use
+/// the same pairing: [`LazyPairParams::fixed_first`]).
+#[must_use]
+pub fn lazy_orbital_kernel_with<C>(
+    params: LazyPairParams,
+    p_large: f64,
+    streams: SecondStageStreams<C>,
+) -> DelayedRejection<PairwiseMltProposal<LazyPairwise>, ByState<LazyOrbital, C>> {
+    let first = PairwiseMltProposal::new(LazyPairwise { params }, p_large.clamp(0.0, 1.0))
+        .unwrap_or_else(|_| unreachable!("clamped"));
+    let second = streams.stages(|mask| LazyOrbital::new(params, mask));
+    DelayedRejection::orbital(first, second).second_stage_after_small_steps()
 }
 
 /// The authors' bold first stage of Tierney-Mira and Green-Mira: a large step with

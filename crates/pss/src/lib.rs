@@ -19,17 +19,18 @@
 //!
 //! # Example
 //!
-//! The whole outside-user program (`examples/custom_target.rs`; run it with
-//! `cargo run --release --example custom_target`): an analytic integrand rendered to a small
-//! image with PSSMLT and automatic large-step control, with DR orbital and with MALA.
+//! The whole outside-user program (`examples/pss_custom_target.rs`; run it with
+//! `cargo run --release -p pss --example pss_custom_target`): an analytic integrand rendered to
+//! a small image with PSSMLT and automatic large-step control, with DR orbital and with MALA.
 //! (Compiled here; its convergence tests run with the workspace tests.)
 //!
-#![doc = concat!("```rust,no_run\n", include_str!("../examples/custom_target.rs"), "\n```")]
+#![doc = concat!("```rust,no_run\n", include_str!("../examples/pss_custom_target.rs"), "\n```")]
 
 pub mod dr;
 mod error;
 mod fresh;
 pub mod langevin;
+pub mod lazy_pairs;
 pub mod mala;
 mod mutation;
 pub mod noise;
@@ -45,9 +46,10 @@ pub mod testing;
 
 pub use error::PssError;
 pub use fresh::FreshPss;
+pub use lazy_pairs::{LazyOrbital, LazyPairParams, LazyPairwise};
 pub use mcmc_core::delayed_rejection::{WrappedCauchy, RIOUX_LAVOIE2020_RHO};
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
-pub use on_layout::{LayoutGhost, OnLayout, PairwiseMltProposal};
+pub use on_layout::{LayoutGhost, LogQPair, OnLayout, PairwiseMltProposal};
 pub use orbital::Orbital;
 pub use pairwise::{
     torus_displacement, Group, PairLayout, PairwiseKelemen, PairwiseKelemenParams,
@@ -55,4 +57,4 @@ pub use pairwise::{
 };
 pub use proposal::{LargeStep, PssmltProposal, SmallStep, ALL_STREAMS};
 pub use raster::{RasterParams, RasterStep, RASTER_DEFAULT_PROBABILITY};
-pub use state::{Pending, PssState, MAX_STREAMS};
+pub use state::{Pending, PssState, MAX_STREAMS, TAGGED_READS};

@@ -9,9 +9,12 @@
 //!   Chains of depth `<= MalaParams::max_depth` use MALA, deeper ones PSSMLT's Kelemen small
 //!   step. The depth is fixed per chain, so the choice is a fixed kernel per chain and needs
 //!   no state-dependent selection term.
-//! - **Coordinates.** MALA moves the coordinates the current state read, in
-//!   [`PssCoordinates`] order, which is the order the target's gradient must be written in; a
-//!   candidate that reads another set of coordinates is rejected.
+//! - **Coordinates.** MALA moves the continuous coordinates the current state read (not the
+//!   ones the target tagged discrete with [`crate::PssState::next_discrete`]), in
+//!   [`PssCoordinates`] order, which is the order the target's gradient must be written in;
+//!   a candidate that reads another set of coordinates or tags others discrete is rejected.
+//!   Discrete coordinates move by large steps and by the optional fallback step
+//!   ([`MalaParams::fallback`], every coordinate).
 //! - **Variants** ([`MalaVariant`]): plain (eq. 7), online (Alg. 2, diminishing adaptation),
 //!   cache-driven (Alg. 3), hybrid (Alg. 4). Adaptation is kept per dimension
 //!   ([`PerDimension`]); the caches of the cache-driven and hybrid variants are shared among
@@ -111,7 +114,16 @@ pub struct MalaParams {
     /// Standard deviation of the cheap first stage of [`cheap_then_expensive_kernel`]
     /// (default 1/64, Kelemen 2002's `s2`).
     pub cheap_sigma: f64,
+    /// Probability of the plain fallback step in place of a MALA step: an isotropic
+    /// Gaussian of standard deviation [`FALLBACK_SIGMA`] on *every* coordinate, the discrete
+    /// ones included (the authors' code: `uniformmixprob` 0.1, `perturbStdDev` 0.01, to
+    /// escape states where the gradient misleads). Default 0 (the paper's text has none);
+    /// `p_large + fallback` is capped at 1.
+    pub fallback: f64,
 }
+
+/// Standard deviation of the fallback step (the authors' code's `perturbStdDev`).
+pub const FALLBACK_SIGMA: f64 = 0.01;
 
 impl MalaParams {
     /// Luan et al. 2020: hybrid adaptation (Alg. 4) with section 7's parameters
@@ -124,6 +136,30 @@ impl MalaParams {
             langevin: LangevinParams::luan2020(),
             max_depth: 3,
             cheap_sigma: 1.0 / 64.0,
+            fallback: 0.0,
+        }
+    }
+
+    /// The paper's values with the authors' code's semantics
+    /// ([`LangevinParams::luan2020_values`]), hybrid adaptation, MALA up to depth 3, the
+    /// code's fallback step (probability 0.1).
+    #[must_use]
+    pub const fn luan2020_values() -> Self {
+        Self {
+            langevin: LangevinParams::luan2020_values(),
+            fallback: 0.1,
+            ..Self::luan2020()
+        }
+    }
+
+    /// The authors' code ([`LangevinParams::luan2020_code`]), hybrid adaptation, MALA up to
+    /// depth 3, the code's fallback step (probability 0.1).
+    #[must_use]
+    pub const fn luan2020_code() -> Self {
+        Self {
+            langevin: LangevinParams::luan2020_code(),
+            fallback: 0.1,
+            ..Self::luan2020()
         }
     }
 }
@@ -141,8 +177,8 @@ impl Default for MalaParams {
 /// is tunable and its gradient caches can be shared ([`HasGradientCache`]).
 #[derive(Clone, Debug)]
 pub enum MalaChainKernel {
-    /// MALA with adaptation, mixed with large steps.
-    Mala(Langevin<PerDimension<AnyAdaptation>, PssCoordinates, LargeStep>),
+    /// MALA with adaptation, mixed with large steps and the fallback step.
+    Mala(Langevin<PerDimension<AnyAdaptation>, PssCoordinates, LargeStep, SmallStep>),
     /// Delayed rejection: isotropic Gaussian, then MALA (Green-Mira).
     CheapThenExpensive(CheapThenExpensive<PerDimension<AnyAdaptation>, PssCoordinates, LargeStep>),
     /// PSSMLT's Kelemen small step with large steps (deep chains).
@@ -150,7 +186,8 @@ pub enum MalaChainKernel {
 }
 
 /// The kernel of a chain of path depth `depth`: MALA of `params` with large-step probability
-/// `p_large` (clamped to `[0, 1]`) if `depth <= params.max_depth`, else Kelemen's small step
+/// `p_large` (clamped to `[0, 1]`) and the fallback step of probability `params.fallback`
+/// (capped at `1 - p_large`) if `depth <= params.max_depth`, else Kelemen's small step
 /// `small` (also where `params.langevin` is out of range).
 #[must_use]
 pub fn mala_kernel(
@@ -164,8 +201,17 @@ pub fn mala_kernel(
         return kelemen(small, p);
     }
     let adaptation = PerDimension::new(params.variant.adaptation(&params.langevin));
+    let fallback = SmallStep::new(SmallMutation::Gaussian {
+        sigma: FALLBACK_SIGMA,
+    });
+    let p_fallback = if params.fallback.is_finite() {
+        params.fallback.clamp(0.0, 1.0 - p)
+    } else {
+        0.0
+    };
     match Langevin::new(params.langevin, adaptation, PssCoordinates)
         .and_then(|k| k.with_large_step(LargeStep, p))
+        .and_then(|k| k.with_fallback(fallback, p_fallback))
     {
         Ok(k) => MalaChainKernel::Mala(k),
         Err(_) => kelemen(small, p),

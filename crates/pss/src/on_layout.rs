@@ -6,6 +6,7 @@ use mcmc_core::proposal::ConditionalProposal;
 use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
+use crate::lazy_pairs::LazyPairwise;
 use crate::orbital::Orbital;
 use crate::pairwise::{torus_displacement, Group, PairLayout, PairwiseKelemen};
 use crate::proposal::{LargeStep, ALL_STREAMS};
@@ -246,7 +247,7 @@ impl<S> PairwiseMltProposal<S> {
     }
 }
 
-impl<S: Proposal<PssState>> Proposal<PssState> for PairwiseMltProposal<S> {
+impl<S: Proposal<PssState> + LogQPair> Proposal<PssState> for PairwiseMltProposal<S> {
     fn propose<R: Rng + ?Sized>(&self, x: &PssState, y: &mut PssState, rng: &mut R) -> Proposed {
         if rng.random::<f64>() < self.p_large {
             LargeStep.propose(x, y, rng).with_component(1)
@@ -274,6 +275,69 @@ impl<S: Proposal<PssState>> Proposal<PssState> for PairwiseMltProposal<S> {
             0 => (1.0 - self.p_large).ln() + self.small.log_q(from, to),
             _ => self.p_large.ln() + LargeStep.log_q(from, to),
         }
+    }
+
+    /// Component 0: the layout step's pair of densities without their shared factors
+    /// (the selection probability, and whatever the small step skips); component 1 whole.
+    fn log_q_component_pair(
+        &self,
+        j: usize,
+        a: &PssState,
+        b: &PssState,
+        x: &PssState,
+        y: &PssState,
+    ) -> (f64, f64) {
+        match j {
+            0 => self.small.log_q_pair(a, b, x, y),
+            _ => (self.log_q_component(j, a, b), self.log_q_component(j, x, y)),
+        }
+    }
+}
+
+/// A small step whose density over a pair of moves can skip the factors the moves share.
+pub trait LogQPair {
+    /// `(log q(a -> b) - c, log q(x -> y) - c)` for some `c` common to both
+    /// ([`Proposal::log_q_component_pair`]).
+    fn log_q_pair(&self, a: &PssState, b: &PssState, x: &PssState, y: &PssState) -> (f64, f64);
+}
+
+impl LogQPair for OnLayout<PairwiseKelemen> {
+    /// Per group of the layout, skipping those where `a = x` and `b = y` bit for bit (the
+    /// density is a product over groups).
+    fn log_q_pair(&self, a: &PssState, b: &PssState, x: &PssState, y: &PssState) -> (f64, f64) {
+        let streams = self.layout.streams();
+        if [a, b, x, y].iter().any(|s| s.streams() != streams) {
+            return (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        }
+        let p = &self.stage.params;
+        let same = |i: usize| stored(a, i) == stored(x, i) && stored(b, i) == stored(y, i);
+        let density = |from: &PssState, to: &PssState, group: Group| {
+            let d = |i| torus_displacement(stored(from, i), stored(to, i));
+            match group {
+                Group::Pair(i, k) => p.pair_log_density(d(i), d(k)),
+                Group::Single(i) => p.single_log_density(d(i)),
+            }
+        };
+        let (mut forward, mut reverse) = (0.0, 0.0);
+        for group in self.layout.groups(self.stream_mask) {
+            let unmoved = match group {
+                Group::Pair(i, k) => same(i) && same(k),
+                Group::Single(i) => same(i),
+            };
+            if !unmoved {
+                forward += density(a, b, group);
+                reverse += density(x, y, group);
+            }
+        }
+        let clean = |v: f64| if v.is_nan() { f64::NEG_INFINITY } else { v };
+        (clean(forward), clean(reverse))
+    }
+}
+
+impl LogQPair for LazyPairwise {
+    /// Whole densities (the orbital rule never needs them).
+    fn log_q_pair(&self, a: &PssState, b: &PssState, x: &PssState, y: &PssState) -> (f64, f64) {
+        (self.log_q(a, b), self.log_q(x, y))
     }
 }
 

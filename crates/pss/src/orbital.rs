@@ -45,6 +45,8 @@
 //! catch-up and `absorb_rejected` are kept). Both stages are symmetric only because the
 //! layout does not depend on the state: a layout that grew with what `x` has read would
 //! perturb coordinates in one direction that the reverse move leaves alone.
+//! [`crate::lazy_pairs`] removes the layout instead: both stages act on every pair of every
+//! stream, computed only where the target reads, unread pairs caught up exactly.
 
 use mcmc_core::delayed_rejection::{Group, OrbitalWalk, WrappedCauchy};
 use mcmc_core::proposal::ConditionalProposal;

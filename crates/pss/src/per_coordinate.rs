@@ -4,7 +4,7 @@
 use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
-use crate::on_layout::{stored, OnLayout};
+use crate::on_layout::{stored, LogQPair, OnLayout};
 use crate::pairwise::Group;
 use crate::state::PssState;
 use crate::SmallMutation;
@@ -67,6 +67,27 @@ impl Proposal<PssState> for OnLayout<SmallMutation> {
 
     fn is_symmetric(&self) -> bool {
         true
+    }
+}
+
+impl LogQPair for OnLayout<SmallMutation> {
+    /// Per coordinate of the layout, skipping those where `a = x` and `b = y` bit for bit
+    /// (the density is a product over coordinates).
+    fn log_q_pair(&self, a: &PssState, b: &PssState, x: &PssState, y: &PssState) -> (f64, f64) {
+        let streams = self.layout.streams();
+        if [a, b, x, y].iter().any(|s| s.streams() != streams) {
+            return (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        }
+        let (mut forward, mut reverse) = (0.0, 0.0);
+        self.for_each_index(|i| {
+            let (va, vb, vx, vy) = (stored(a, i), stored(b, i), stored(x, i), stored(y, i));
+            if va != vx || vb != vy {
+                forward += self.stage.log_density(va, vb);
+                reverse += self.stage.log_density(vx, vy);
+            }
+        });
+        let clean = |v: f64| if v.is_nan() { f64::NEG_INFINITY } else { v };
+        (clean(forward), clean(reverse))
     }
 }
 

@@ -1,5 +1,6 @@
 //! The primary-sample-space state: a lazily grown vector of primary samples in [0, 1).
 
+use crate::lazy_pairs::LazyPairParams;
 use crate::mutation::SmallMutation;
 use crate::noise::uniform;
 
@@ -22,6 +23,33 @@ pub enum Pending {
     },
     /// A large step: every coordinate is a fresh uniform.
     Large,
+    /// The pairwise polar Kelemen step of delayed rejection on every pair `(2k, 2k + 1)` of
+    /// every stream, applied pair by pair as the target reads ([`crate::LazyPairwise`]).
+    Pairs(LazyPairParams),
+    /// The orbital second stage after the rejected [`Pending::Pairs`] candidate of key
+    /// `first_key`, on the streams of `stream_mask` ([`crate::LazyOrbital`]).
+    Orbit {
+        /// Radius and angle laws.
+        params: LazyPairParams,
+        /// The key of the rejected first-stage candidate (its moves are recomputed).
+        first_key: u64,
+        /// Streams moved; the others keep the parent's values.
+        stream_mask: u8,
+    },
+}
+
+impl Pending {
+    /// The streams a candidate with this pending mutation moves, of `streams` streams.
+    fn moved_streams(self, streams: usize) -> u8 {
+        let all = ((1u16 << streams) - 1) as u8;
+        match self {
+            Pending::None => 0,
+            Pending::Small { stream_mask, .. } | Pending::Orbit { stream_mask, .. } => {
+                stream_mask & all
+            }
+            Pending::Large | Pending::Pairs(_) => all,
+        }
+    }
 }
 
 /// A point of primary sample space: the random numbers a path was built from.
@@ -83,6 +111,11 @@ pub struct PssState {
     iteration: [u64; MAX_STREAMS],
     /// Per stream: iteration of the last large step.
     last_large: [u64; MAX_STREAMS],
+    /// Per stream: accepted orbital second-stage steps along this state's lineage.
+    orbits: [u64; MAX_STREAMS],
+    /// Per coordinate: the stream's `orbits` when it was last brought up to date (empty, i.e.
+    /// all 0, until a lineage takes an orbital step; see [`crate::lazy_pairs`]).
+    orbit_stamps: Vec<u64>,
     pending: Pending,
     key: u64,
     /// The key of the state this one was proposed from (to check `absorb_rejected` calls).
@@ -90,8 +123,14 @@ pub struct PssState {
     /// Parent values this candidate's evaluation drew (index, value): see the type docs.
     observed: Vec<(usize, f64)>,
     cursor: [usize; MAX_STREAMS],
+    /// Per stream: bit `k` set if the last evaluation consumed the stream's `k`-th number as
+    /// a discrete choice or not at all ([`PssState::next_discrete`]).
+    discrete: [u64; MAX_STREAMS],
     stream: usize,
 }
+
+/// Reads per stream whose discrete tag is recorded (later reads count as continuous).
+pub const TAGGED_READS: usize = 64;
 
 /// Stamp of a coordinate that was never read.
 const NEVER: u64 = u64::MAX;
@@ -115,11 +154,14 @@ impl Clone for PssState {
         self.streams = source.streams;
         self.iteration = source.iteration;
         self.last_large = source.last_large;
+        self.orbits = source.orbits;
+        self.orbit_stamps.clone_from(&source.orbit_stamps);
         self.pending = source.pending;
         self.key = source.key;
         self.parent_key = source.parent_key;
         self.observed.clone_from(&source.observed);
         self.cursor = source.cursor;
+        self.discrete = source.discrete;
         self.stream = source.stream;
     }
 }
@@ -137,12 +179,7 @@ impl mcmc_core::Point for PssState {
             return;
         }
         for &(index, value) in &rejected.observed {
-            if index >= self.values.len() {
-                self.values.resize(index + 1, 0.0);
-                self.stamps.resize(index + 1, NEVER);
-            }
-            self.values[index] = value;
-            self.stamps[index] = self.iteration[index % self.streams];
+            self.store(index, value);
         }
     }
 
@@ -199,11 +236,14 @@ impl PssState {
             streams,
             iteration: [0; MAX_STREAMS],
             last_large: [0; MAX_STREAMS],
+            orbits: [0; MAX_STREAMS],
+            orbit_stamps: Vec::new(),
             pending: Pending::None,
             key,
             parent_key: key,
             observed: Vec::new(),
             cursor: [0; MAX_STREAMS],
+            discrete: [0; MAX_STREAMS],
             stream: 0,
         }
     }
@@ -217,10 +257,13 @@ impl PssState {
         self.streams = streams.clamp(1, MAX_STREAMS);
         self.iteration = [0; MAX_STREAMS];
         self.last_large = [0; MAX_STREAMS];
+        self.orbits = [0; MAX_STREAMS];
+        self.orbit_stamps.clear();
         self.pending = Pending::None;
         self.key = key;
         self.parent_key = key;
         self.cursor = [0; MAX_STREAMS];
+        self.discrete = [0; MAX_STREAMS];
         self.stream = 0;
     }
 
@@ -271,23 +314,24 @@ impl PssState {
         self.key
     }
 
+    /// The key of the state this one was proposed from (its own key for a fresh state).
+    #[must_use]
+    pub fn parent_key(&self) -> u64 {
+        self.parent_key
+    }
+
     /// Attaches a mutation for the next evaluation: increments the iteration of the mutated
     /// streams (all streams for a large step) and sets the noise key. Called by proposals on
     /// the candidate (a copy of the current state); clears the candidate's observation log.
     pub fn set_pending(&mut self, pending: Pending, key: u64) {
-        match pending {
-            Pending::None => {}
-            Pending::Small { stream_mask, .. } => {
-                for s in 0..self.streams {
-                    if stream_mask & (1 << s) != 0 {
-                        self.iteration[s] += 1;
-                    }
-                }
-            }
-            Pending::Large => {
-                for s in 0..self.streams {
-                    self.iteration[s] += 1;
-                    self.last_large[s] = self.iteration[s];
+        let moved = pending.moved_streams(self.streams);
+        for s in 0..self.streams {
+            if moved & (1 << s) != 0 {
+                self.iteration[s] += 1;
+                match pending {
+                    Pending::Large => self.last_large[s] = self.iteration[s],
+                    Pending::Orbit { .. } => self.orbits[s] += 1,
+                    _ => {}
                 }
             }
         }
@@ -307,9 +351,27 @@ impl PssState {
         self.cursor
     }
 
-    /// Rewinds all stream cursors; targets call this before reading a path.
+    /// Which numbers of each stream the last evaluation tagged discrete
+    /// ([`PssState::next_discrete`]): bit `k` of entry `s` for the `k`-th number of stream `s`
+    /// (the first [`TAGGED_READS`] numbers of a stream; later ones are untagged). MALA keeps
+    /// tagged coordinates fixed ([`crate::langevin::PssCoordinates`]).
+    #[must_use]
+    pub fn discrete_mask(&self) -> [u64; MAX_STREAMS] {
+        self.discrete
+    }
+
+    /// True if the `k`-th number of stream `s` was tagged discrete by the last evaluation.
+    #[inline]
+    #[must_use]
+    pub fn is_discrete(&self, s: usize, k: usize) -> bool {
+        s < MAX_STREAMS && k < TAGGED_READS && self.discrete[s] & (1u64 << k) != 0
+    }
+
+    /// Rewinds all stream cursors and clears the discrete tags; targets call this before
+    /// reading a path.
     pub fn begin(&mut self) {
         self.cursor = [0; MAX_STREAMS];
+        self.discrete = [0; MAX_STREAMS];
         self.stream = 0;
     }
 
@@ -327,6 +389,24 @@ impl PssState {
         self.get(index)
     }
 
+    /// As [`PssState::next_sample`], for a number the target consumes as a *discrete* choice
+    /// (a strategy, a lobe, a light, a Russian-roulette decision) or does not use at all (the
+    /// lens of a pinhole camera, the time of a static scene): its derivative is zero almost
+    /// everywhere, so differentiating or moving it in a Langevin step only wastes the step.
+    /// The read is tagged ([`PssState::discrete_mask`]) and MALA keeps it fixed; large steps
+    /// and the other proposals move it like any number. Tagging is a question of efficiency,
+    /// never of exactness: MALA is exact for any tags that are a function of the state
+    /// (docs/methods/mala.md, "Continuous coordinates").
+    #[inline]
+    pub fn next_discrete(&mut self) -> f64 {
+        let s = self.stream;
+        let k = self.cursor[s];
+        if k < TAGGED_READS {
+            self.discrete[s] |= 1u64 << k;
+        }
+        self.next_sample()
+    }
+
     /// Coordinate `index` (interleaved numbering), brought up to date; grows the state with
     /// fresh uniforms if needed.
     #[inline]
@@ -340,9 +420,11 @@ impl PssState {
         if self.stamps[index] == now {
             return self.values[index];
         }
+        if matches!(self.pending, Pending::Pairs(_) | Pending::Orbit { .. }) {
+            return self.catch_up_pair(index);
+        }
         let value = self.catch_up(index, stream, now);
-        self.values[index] = value;
-        self.stamps[index] = now;
+        self.store(index, value);
         value
     }
 
@@ -397,6 +479,9 @@ impl PssState {
                     base
                 }
             }
+            Pending::Pairs(_) | Pending::Orbit { .. } => {
+                unreachable!("pairwise pending mutations catch up by pairs")
+            }
         }
     }
 
@@ -406,12 +491,121 @@ impl PssState {
     /// pairwise stages of delayed rejection, which first read the parent's value with
     /// [`PssState::get`] on the candidate, so that catch-up draws are logged as usual).
     pub fn set(&mut self, index: usize, value: f64) {
+        self.store(index, crate::mutation::wrap(value));
+    }
+
+    /// Stores `value` as coordinate `index`, stamped up to date (both stamps).
+    fn store(&mut self, index: usize, value: f64) {
         if index >= self.values.len() {
             self.values.resize(index + 1, 0.0);
             self.stamps.resize(index + 1, NEVER);
         }
-        self.values[index] = crate::mutation::wrap(value);
-        self.stamps[index] = self.iteration[index % self.streams];
+        let stream = index % self.streams;
+        self.values[index] = value;
+        self.stamps[index] = self.iteration[stream];
+        if self.orbits[stream] != 0 || index < self.orbit_stamps.len() {
+            if index >= self.orbit_stamps.len() {
+                self.orbit_stamps.resize(index + 1, 0);
+            }
+            self.orbit_stamps[index] = self.orbits[stream];
+        }
+    }
+
+    /// The `orbits` count stamped on coordinate `index`.
+    fn orbit_stamp(&self, index: usize) -> u64 {
+        self.orbit_stamps.get(index).copied().unwrap_or(0)
+    }
+
+    /// Catches up and moves the pair holding coordinate `index` under a pending
+    /// [`Pending::Pairs`] or [`Pending::Orbit`] (see [`crate::lazy_pairs`] for why this is
+    /// exact); returns coordinate `index`.
+    #[cold]
+    fn catch_up_pair(&mut self, index: usize) -> f64 {
+        let streams = self.streams;
+        let stream = index % streams;
+        let (params, moved) = match self.pending {
+            Pending::Pairs(params) => (params, true),
+            Pending::Orbit {
+                params,
+                stream_mask,
+                ..
+            } => (params, stream_mask & (1 << stream) != 0),
+            _ => unreachable!("called for pairwise pending mutations only"),
+        };
+        let now = self.iteration[stream];
+        let parent_now = now - u64::from(moved);
+        let Some(pair) = params.pair_of(index, streams) else {
+            // A kept first number: only large steps renew it.
+            let stamp = self.stamps[index];
+            let value = if stamp == NEVER || stamp < self.last_large[stream] {
+                let k = mcmc_core::seed::mix64(self.key ^ CATCH_UP_SALT);
+                let v = uniform(k, index as u64, u64::MAX);
+                self.observed.push((index, v));
+                v
+            } else {
+                self.values[index]
+            };
+            self.store(index, value);
+            return value;
+        };
+        let a = pair[0];
+        if pair[1] >= self.values.len() {
+            self.values.resize(pair[1] + 1, 0.0);
+            self.stamps.resize(pair[1] + 1, NEVER);
+        }
+        let orbit_step = moved && matches!(self.pending, Pending::Orbit { .. });
+        let parent_orbits = self.orbits[stream] - u64::from(orbit_step);
+        let catch_up_key = mcmc_core::seed::mix64(self.key ^ CATCH_UP_SALT);
+        // The parent's pair, each coordinate drawn from its law given the history (logged).
+        let mut parent = [0.0; 2];
+        for (c, &i) in pair.iter().enumerate() {
+            let stamp = self.stamps[i];
+            if stamp == now {
+                continue; // already computed in this candidate
+            }
+            parent[c] = if stamp == parent_now {
+                self.values[i]
+            } else if stamp == NEVER || stamp < self.last_large[stream] {
+                uniform(catch_up_key, i as u64, u64::MAX)
+            } else {
+                let second = parent_orbits - self.orbit_stamp(i);
+                let first = (parent_now - stamp).saturating_sub(second);
+                let d = params.missed_steps(catch_up_key, a as u64, first, second);
+                crate::mutation::wrap(self.values[i] + d[c])
+            };
+            if stamp != parent_now {
+                self.observed.push((i, parent[c]));
+            }
+        }
+        let d = if !moved {
+            [0.0, 0.0]
+        } else if let Pending::Orbit { first_key, .. } = self.pending {
+            let d = params.step_displacement(first_key, a as u64, 0);
+            params.orbit_displacement(d, uniform(self.key, a as u64, 2))
+        } else {
+            params.step_displacement(self.key, a as u64, 0)
+        };
+        for (c, &i) in pair.iter().enumerate() {
+            if self.stamps[i] != now {
+                self.store(i, crate::mutation::wrap(parent[c] + d[c]));
+            }
+        }
+        self.values[index]
+    }
+
+    /// Brings up to date every coordinate `other` (a sibling candidate of the same parent)
+    /// brought up to date, in the streams of `stream_mask`: the orbital stage computes `z` on
+    /// the pairs the rejected `y` read ([`crate::LazyOrbital`]).
+    pub fn materialize_read_by(&mut self, other: &Self, stream_mask: u8) {
+        if other.streams != self.streams {
+            return;
+        }
+        for i in 0..other.values.len() {
+            let stream = i % self.streams;
+            if stream_mask & (1 << stream) != 0 && other.stamps[i] == other.iteration[stream] {
+                self.get(i);
+            }
+        }
     }
 
     /// Brings every stored coordinate up to date (eager evaluation of the pending mutation).

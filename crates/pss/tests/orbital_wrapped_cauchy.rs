@@ -117,3 +117,51 @@ fn wrapped_cauchy_negative_controls_are_rejected() {
     let (_, p) = ks_one_sample(&halved, |t| wc.cdf(t));
     assert!(p < OVERWHELMING, "KS misses the halved quantile: p = {p}");
 }
+
+/// The angle of a rotation `(cos, sin)`.
+fn angle_of((cos, sin): (f64, f64)) -> f64 {
+    sin.atan2(cos)
+}
+
+/// The rotation sampler without the angle (`WrappedCauchy::rotation`: half-angle tangent,
+/// no arctangent, no sine-cosine) has the law of the quantile sampler: KS against the
+/// closed-form CDF and a two-sample chi-square against `WrappedCauchy::sample`; negative
+/// control: the same identities with the tangent scaled by `k` instead of `1 / k` (the
+/// concentration's reciprocal), rejected by both.
+#[test]
+fn rotation_sampler_has_the_quantile_law() {
+    let wc = WrappedCauchy::rioux_lavoie2020();
+    let rotation = wrapped_cauchy_samples(|rng| angle_of(wc.sample_rotation(rng)), 21);
+    let (d, p) = ks_one_sample(&rotation, |t| wc.cdf(t));
+    println!("rotation sampler, KS vs the CDF: D = {d:.2e}, p = {p:.3}");
+    assert!(p >= level(), "KS rejects the rotation sampler: p = {p}");
+    let quantile = wrapped_cauchy_samples(|rng| wc.sample(rng), 22);
+    let bin = |s: &[f64]| {
+        let mut c = vec![0u64; ANGLE_BINS];
+        for &t in s {
+            c[angle_bin(t, ANGLE_BINS)] += 1;
+        }
+        c
+    };
+    let r = chi_square_two_sample(&bin(&rotation), &bin(&quantile), 5.0);
+    report("rotation sampler vs quantile sampler (two-sample)", &r);
+    r.assert_passes("rotation vs quantile sampler", TESTS);
+
+    let k = (1.0 + RIOUX_LAVOIE2020_RHO) / (1.0 - RIOUX_LAVOIE2020_RHO);
+    let wrong = wrapped_cauchy_samples(
+        |rng| {
+            let tau = (PI * (rng.random::<f64>() - 0.5)).tan() * k;
+            let inv = 1.0 / (1.0 + tau * tau);
+            angle_of(((1.0 - tau * tau) * inv, 2.0 * tau * inv))
+        },
+        23,
+    );
+    let (_, p) = ks_one_sample(&wrong, |t| wc.cdf(t));
+    assert!(
+        p < OVERWHELMING,
+        "KS misses the reciprocal concentration: p = {p}"
+    );
+    let r = chi_square_two_sample(&bin(&wrong), &bin(&quantile), 5.0);
+    report("negative control: tangent scaled by k, two-sample", &r);
+    assert!(r.p_value < OVERWHELMING, "{r}");
+}

@@ -17,6 +17,7 @@ use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::SeedableRng;
 use render::bdpt::diff::evaluate_strategy;
 use render::bdpt::{self, BdptParams, BdptScratch};
+use render::mlt::dr::DrBase;
 use render::mlt::mala::{self, DifferentiableMmlt, GradientMethod, MalaConfig, MalaVariant};
 use render::mlt::{MmltTarget, PssmltTarget, PATH_STREAMS};
 use render::sampler::{IndependentSampler, Sampler};
@@ -26,7 +27,11 @@ const SIZE: u32 = 64;
 const STEPS: u64 = 1_000;
 
 fn scene() -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-glass.gltf");
+    scene_named("cornell-glass")
+}
+
+fn scene_named(name: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenes/{name}.gltf"));
     let mut s = Scene::load(&path).unwrap_or_else(|_| Scene::cornell_box(SIZE, SIZE));
     s.set_resolution(SIZE, SIZE);
     s
@@ -39,6 +44,15 @@ fn kernel() -> Mh<PssmltProposal> {
 
 /// Steps a chain of `kernel` started from a bootstrap sample of `target` chosen by luminance.
 fn bench_chain<T, K>(c: &mut Criterion, name: &str, target: &T, kernel: K)
+where
+    T: Target<State = PssState, Payload = render::mlt::PathPayload>,
+    K: mcmc_core::Kernel<T>,
+{
+    bench_chain_in(c, "mutations_cornell_glass", name, target, kernel);
+}
+
+/// [`bench_chain`] in the benchmark group `group`.
+fn bench_chain_in<T, K>(c: &mut Criterion, group: &str, name: &str, target: &T, kernel: K)
 where
     T: Target<State = PssState, Payload = render::mlt::PathPayload>,
     K: mcmc_core::Kernel<T>,
@@ -67,7 +81,7 @@ where
         return;
     };
     let mut buffer = SplatGrid::new(SIZE as usize, SIZE as usize);
-    let mut group = c.benchmark_group("mutations_cornell_glass");
+    let mut group = c.benchmark_group(group);
     group.throughput(Throughput::Elements(STEPS));
     group.bench_function(name, |b| {
         b.iter(|| {
@@ -163,13 +177,18 @@ fn gradient(c: &mut Criterion) {
         let mut x = PssState::new(PATH_STREAMS, key);
         target.evaluate(&mut x, &mut payload);
         let dims: usize = x.read_counts().iter().sum();
-        let mut group = c.benchmark_group(format!("mmlt_depth{depth}_{dims}_dims"));
+        let moved = pss::langevin::moved_count(&x);
+        let mut group = c.benchmark_group(format!("mmlt_depth{depth}_{dims}_dims_{moved}_moved"));
         group.bench_function("value", |b| {
             b.iter(|| black_box(target.evaluate(&mut x, &mut payload)))
         });
         let mut grad = Vec::new();
         group.bench_function("value_and_gradient_dual", |b| {
             b.iter(|| black_box(target.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
+        });
+        let constant_mis = target.with_method(GradientMethod::DualConstantMis);
+        group.bench_function("value_and_gradient_dual_constant_mis", |b| {
+            b.iter(|| black_box(constant_mis.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
         });
         // The replay alone in f64 (no derivatives): what the dual pass costs without lanes.
         let counts = x.read_counts();
@@ -229,5 +248,34 @@ fn bookkeeping(c: &mut Criterion) {
     group.finish();
 }
 
+/// Delayed rejection's step cost at max depth 5: DR orbital (lazy pairwise stages,
+/// `render::mlt::dr::lazy_orbital_kernel`) against one-stage Kelemen on the same target, on
+/// PSSMLT and on the MMLT chains of depth 2 and 4, per scene (64x64, one thread, large steps
+/// 0.3). The ratio of their mutations per second is the step cost.
+fn dr_step_cost(c: &mut Criterion) {
+    for name in ["cornell-glass", "glossy-highlight", "caustic-pool"] {
+        let mut scene = scene_named(name);
+        scene.set_resolution(SIZE, SIZE);
+        let params = BdptParams::default();
+        let group = format!("dr_step_cost_{}", name.replace('-', "_"));
+        let pssmlt = PssmltTarget::new(&scene, params, SIZE, SIZE);
+        bench_chain_in(c, &group, "pssmlt_kelemen", &pssmlt, kernel());
+        let dr = render::mlt::dr::lazy_orbital_kernel(DrBase::Pssmlt, 0.3, 0, false);
+        bench_chain_in(c, &group, "pssmlt_dr_orbital", &pssmlt, dr);
+        let mmlt = MmltTarget::all_depths(&scene, params, SIZE, SIZE);
+        for depth in [2u32, 4] {
+            let target = &mmlt[depth as usize];
+            bench_chain_in(c, &group, &format!("mmlt{depth}_kelemen"), target, kernel());
+            let dr = render::mlt::dr::lazy_orbital_kernel(DrBase::Mmlt, 0.3, depth, false);
+            bench_chain_in(c, &group, &format!("mmlt{depth}_dr_orbital"), target, dr);
+        }
+    }
+}
+
 criterion_group!(benches, integrators, gradient, bookkeeping);
-criterion_main!(benches);
+criterion_group! {
+    name = dr;
+    config = Criterion::default().sample_size(20).measurement_time(std::time::Duration::from_secs(3)).warm_up_time(std::time::Duration::from_secs(1));
+    targets = dr_step_cost
+}
+criterion_main!(benches, dr);

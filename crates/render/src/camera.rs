@@ -358,6 +358,13 @@ impl Camera {
         }
     }
 
+    /// True if the pose changes during the shutter interval (the time of a ray matters).
+    #[must_use]
+    #[inline]
+    pub fn is_moving(&self) -> bool {
+        self.moving && self.shutter_close > self.shutter_open
+    }
+
     /// The shutter interval `(open, close)`.
     #[must_use]
     #[inline]

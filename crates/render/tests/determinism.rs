@@ -204,3 +204,85 @@ fn gltf_scene_with_glass_is_deterministic() {
     let b = run(&scene, &settings(16, 16, 3, 3));
     assert!(bits(&a) == bits(&b));
 }
+
+/// Delayed rejection over the path tracer (`--dr-on pssmlt-pt`, orbital and the authors'
+/// Tierney-Mira), with the direct pass (orbital on PSSMLT-PT and on MMLT) and with MMLT's
+/// strategy fixed along the chain: 1 and 2 threads give the same image, another seed
+/// another.
+#[test]
+fn drmlt_over_the_path_tracer_and_with_the_direct_pass_is_bit_identical() {
+    use render::methods::direct_pass::DirectSettings;
+    use render::mlt::dr::{DrBase, DrVariant};
+    let scene = Scene::cornell_box(24, 16);
+    for (variant, base, direct) in [
+        (DrVariant::Orbital, DrBase::PssmltPt, DirectSettings::OFF),
+        (
+            DrVariant::TierneyMira,
+            DrBase::PssmltPt,
+            DirectSettings::OFF,
+        ),
+        (
+            DrVariant::Orbital,
+            DrBase::PssmltPt,
+            DirectSettings::balanced(1),
+        ),
+        (
+            DrVariant::Orbital,
+            DrBase::Mmlt,
+            DirectSettings::balanced(1),
+        ),
+        (DrVariant::Orbital, DrBase::Mmlt, DirectSettings::OFF),
+    ] {
+        let with = |threads, seed| {
+            let method = DrmltSettings {
+                direct,
+                // The last row: MMLT's strategy fixed along the chain.
+                fixed_strategy: base == DrBase::Mmlt && direct == DirectSettings::OFF,
+                ..DrmltSettings::rioux_lavoie2020_with(variant, base)
+            };
+            with_method(method.into(), 24, 16, threads, seed)
+        };
+        let reference = run(&scene, &with(1, 17));
+        assert!(reference.mean_luminance() > 0.0, "{variant:?} {base:?}");
+        assert!(
+            bits(&run(&scene, &with(2, 17))) == bits(&reference),
+            "{variant:?} {base:?} {direct:?}: 2 threads differ from 1"
+        );
+        assert!(
+            bits(&run(&scene, &with(1, 18))) != bits(&reference),
+            "{variant:?} {base:?}: seed ignored"
+        );
+    }
+}
+
+/// The cache-sharing Langevin variants with caches small enough to fill within the test
+/// (so rounds pool, the caches freeze and the hybrid switches), pooled every 8 mutations per
+/// chain, under the paper-values and the code presets (fallback steps included).
+#[test]
+fn mala_cache_and_hybrid_with_short_rounds_and_full_caches_are_bit_identical() {
+    use render::methods::MalaSettings;
+    use render::mlt::mala::MalaVariant;
+    let scene = Scene::cornell_box(24, 16);
+    for base in [
+        MalaSettings::luan2020_values(),
+        MalaSettings::luan2020_code(),
+    ] {
+        for variant in [MalaVariant::Cache, MalaVariant::Hybrid] {
+            let with = |threads| {
+                let mut m = base;
+                m.config.variant = variant;
+                m.config.params.cache_size = 40;
+                m.config.cache_round = 8;
+                with_method(m.into(), 24, 16, threads, 17)
+            };
+            let reference = run(&scene, &with(1));
+            assert!(reference.mean_luminance() > 0.0, "{variant:?}");
+            for threads in [2, 3] {
+                assert!(
+                    bits(&run(&scene, &with(threads))) == bits(&reference),
+                    "{variant:?}: {threads} threads differ from 1"
+                );
+            }
+        }
+    }
+}

@@ -27,8 +27,9 @@ use pss::{KelemenParams, PssmltProposal, SmallMutation, SmallStep};
 use render::bdpt::BdptParams;
 use render::image::Image;
 use render::methods::direct_pass::DirectSettings;
-use render::methods::{MethodSettings, MmltSettings};
+use render::methods::{DrmltSettings, MethodSettings, MmltSettings};
 use render::mlt::direct::{add_into, render_direct, DirectPass, DIRECT_DEPTH_DEFAULT};
+use render::mlt::dr::{DrBase, DrVariant};
 use render::mlt::{
     LargeStepMode, MltBudget, MltDriver, MltEstimator, MltSettings, MmltTarget, PssmltTarget,
     PATH_STREAMS,
@@ -41,11 +42,13 @@ const ALPHA_FAMILY: f64 = 0.001;
 const R: usize = 16;
 const K: usize = 16;
 const BLOCKS: usize = 4;
-/// The positive cases, one per sampler and the session default, and the session defaults of
-/// the chain methods that share the pass (MMLT with its pass on, `mala`, `pssmlt-pt`): image
-/// mean and blocks. (The negative controls are expected to exceed the same critical value;
+/// The positive cases, one per sampler and the session default, the session defaults of
+/// the chain methods that share the pass (MMLT with its pass on, `mala`, `pssmlt-pt`), and
+/// delayed rejection (orbital over the path tracer without and with the pass, orbital on
+/// MMLT and the authors' Tierney-Mira over the path tracer with the pass, orbital on MMLT
+/// with the strategy fixed along the chain): image mean and blocks. (The negative controls are expected to exceed the same critical value;
 /// they are not null-hypothesis comparisons.)
-const N_COMPARISONS: usize = 6 * (1 + BLOCKS * BLOCKS);
+const N_COMPARISONS: usize = 11 * (1 + BLOCKS * BLOCKS);
 const SIZE: u32 = 16;
 const DEPTH: u32 = 5;
 const PASS: DirectPass = DirectPass::Fixed(16);
@@ -213,6 +216,11 @@ fn the_default_balanced_pass_converges_to_bdpt() {
 /// `R` replicates of `method` as the session renders it, at 64 mutations per pixel; every
 /// replicate's notes must report the direct pass and include `note`.
 fn session_replicates(method: MethodSettings, seed0: u64, note: &str) -> Vec<Image> {
+    session_replicates_with(method, seed0, Some(note))
+}
+
+/// [`session_replicates`], with the direct pass's notes checked only if `note` is given.
+fn session_replicates_with(method: MethodSettings, seed0: u64, note: Option<&str>) -> Vec<Image> {
     let cancel = AtomicBool::new(false);
     (0..R as u64)
         .map(|r| {
@@ -226,14 +234,16 @@ fn session_replicates(method: MethodSettings, seed0: u64, note: &str) -> Vec<Ima
                 method: method.with_chains(64, 20_000),
             };
             let out = render(cornell(), &settings, &NoProgress, &cancel).unwrap();
-            for needle in ["direct-lighting pass: depths 0-", note] {
-                assert!(
-                    out.notes.iter().any(|n| n.contains(needle)),
-                    "{needle}: {:?}",
-                    out.notes
-                );
+            if let Some(note) = note {
+                for needle in ["direct-lighting pass: depths 0-", note] {
+                    assert!(
+                        out.notes.iter().any(|n| n.contains(needle)),
+                        "{needle}: {:?}",
+                        out.notes
+                    );
+                }
+                assert!(out.mcmc.as_ref().unwrap().direct_pass.is_some());
             }
-            assert!(out.mcmc.as_ref().unwrap().direct_pass.is_some());
             assert_finite_non_negative(&out.image, "session replicate");
             out.image
         })
@@ -264,6 +274,69 @@ fn the_pass_before_mmlt_mala_and_pssmlt_pt_converges_to_bdpt() {
             critical(),
         );
     }
+}
+
+/// Delayed rejection over the path tracer (`--dr-on pssmlt-pt`) without and with the direct
+/// pass, on MMLT with the pass (its chains then start at depth 2: the kernels' strategy
+/// choice reads the chain's true depth), and the authors' Tierney-Mira over the path tracer
+/// with the pass, converge to BDPT.
+#[test]
+fn drmlt_over_the_path_tracer_and_with_the_pass_converges_to_bdpt() {
+    let dr = |variant, on, direct| {
+        MethodSettings::from(DrmltSettings {
+            direct,
+            ..DrmltSettings::rioux_lavoie2020_with(variant, on)
+        })
+    };
+    let pass = DirectSettings::balanced(1);
+    let cases = [
+        (
+            "drmlt orbital on pssmlt-pt",
+            dr(DrVariant::Orbital, DrBase::PssmltPt, DirectSettings::OFF),
+            50_000,
+            None,
+        ),
+        (
+            "drmlt orbital on pssmlt-pt, direct pass",
+            dr(DrVariant::Orbital, DrBase::PssmltPt, pass),
+            51_000,
+            Some("delayed rejection"),
+        ),
+        (
+            "drmlt orbital on mmlt, direct pass",
+            dr(DrVariant::Orbital, DrBase::Mmlt, pass),
+            52_000,
+            Some("delayed rejection"),
+        ),
+        (
+            "drmlt tierney-mira on pssmlt-pt, direct pass",
+            dr(DrVariant::TierneyMira, DrBase::PssmltPt, pass),
+            53_000,
+            Some("delayed rejection"),
+        ),
+    ];
+    for (name, method, seed0, note) in cases {
+        let images = session_replicates_with(method, seed0, note);
+        against_reference(name, &images, reference(), BLOCKS, critical());
+    }
+}
+
+/// Delayed rejection on MMLT with the strategy fixed along the chain in both stages (the
+/// paper's chain, `DrmltSettings::fixed_strategy`) converges to BDPT.
+#[test]
+fn drmlt_with_the_strategy_fixed_along_the_chain_converges_to_bdpt() {
+    let method = MethodSettings::from(DrmltSettings {
+        fixed_strategy: true,
+        ..DrmltSettings::rioux_lavoie2020_with(DrVariant::Orbital, DrBase::Mmlt)
+    });
+    let images = session_replicates_with(method, 54_000, None);
+    against_reference(
+        "drmlt orbital on mmlt, strategy fixed along the chain",
+        &images,
+        reference(),
+        BLOCKS,
+        critical(),
+    );
 }
 
 /// Negative control for the MMLT split: chains over depths 2..=5 only

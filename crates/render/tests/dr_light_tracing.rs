@@ -103,3 +103,37 @@ fn light_tracing_states_get_a_second_stage_that_moves_the_path() {
     assert!(moved * 10 >= tried * 9, "{moved} of {tried}");
     assert!(control_same * 10 >= tried * 9, "{control_same} of {tried}");
 }
+
+/// The per-depth MMLT layout covers what every strategy of its depth reads (the stages then
+/// move every number the chain's paths use, and nothing of the max-depth layout beyond), and
+/// it is smaller than the max-depth PSSMLT layout. Control: the layout of depth `d - 2` does
+/// not cover depth `d`'s reads.
+#[test]
+fn per_depth_layout_covers_what_each_depth_reads() {
+    let scene = Scene::cornell_box(16, 16);
+    let params = BdptParams::default();
+    let targets = MmltTarget::all_depths(&scene, params, 16, 16);
+    let mut payload = Default::default();
+    for (depth, target) in targets.iter().enumerate() {
+        let layout = dr::mmlt_layout(depth as u32);
+        let mut most = [0usize; PATH_STREAMS];
+        for key in 0..3000u64 {
+            let mut x = PssState::new(PATH_STREAMS, key);
+            target.evaluate(&mut x, &mut payload);
+            for (s, m) in most.iter_mut().enumerate() {
+                *m = (*m).max(x.read_counts()[s]);
+            }
+        }
+        for (s, &m) in most.iter().enumerate() {
+            assert!(m <= layout.dim(s), "depth {depth} stream {s}: reads {m}");
+        }
+        if depth >= 2 {
+            let smaller = dr::mmlt_layout(depth as u32 - 2);
+            assert!(
+                (0..PATH_STREAMS).any(|s| most[s] > smaller.dim(s)),
+                "depth {depth}: {most:?}"
+            );
+        }
+        assert!(layout.len() < dr::dr_layout(params.max_depth).len());
+    }
+}

@@ -125,6 +125,9 @@ enum Method {
     Mala(MalaVariant),
     /// Delayed rejection, cheap (Gaussian) then expensive (MALA), on MMLT.
     CheapThenExpensive,
+    /// Langevin MLT under the paper-values preset (`MalaParams::luan2020_values`: the code's
+    /// semantics, fallback steps) with the given adaptation.
+    MalaValues(MalaVariant),
 }
 
 fn kernel(p: f64) -> Mh<PssmltProposal> {
@@ -168,7 +171,7 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             let base = DrBase::Pssmlt;
             match variant {
                 DrVariant::Orbital => MltDriver::new(&targets, settings).run(
-                    |p| dr::orbital_kernel(layout, base, p, 0),
+                    |p| dr::lazy_orbital_kernel(base, p, 0, false),
                     &NoProgress,
                     &cancel,
                 ),
@@ -208,6 +211,24 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
             &NoProgress,
             &cancel,
         ),
+        Method::MalaValues(variant) => {
+            let p = render::mlt::mala::MalaParams::luan2020_values();
+            mala::render(
+                scene,
+                params,
+                &MalaConfig {
+                    variant,
+                    params: p.langevin,
+                    fallback: p.fallback,
+                    ..MalaConfig::default()
+                },
+                false,
+                settings,
+                SmallMutation::kelemen(KelemenParams::kelemen2002()).unwrap(),
+                &NoProgress,
+                &cancel,
+            )
+        }
         Method::CheapThenExpensive => mala::render(
             scene,
             params,
@@ -220,28 +241,25 @@ fn render(method: Method, scene: &Scene, params: BdptParams, settings: &MltSetti
         ),
         Method::DrMis => {
             let targets = [PssmltTarget::new(scene, params, w, h)];
-            let layout = dr::dr_layout(params.max_depth);
             MltDriver::new(&targets, settings)
                 .estimator(MltEstimator {
                     large_step_mis: true,
                     ..MltEstimator::plain()
                 })
                 .run(
-                    |p| dr::orbital_kernel(layout, DrBase::Pssmlt, p, 0),
+                    |p| dr::lazy_orbital_kernel(DrBase::Pssmlt, p, 0, false),
                     &NoProgress,
                     &cancel,
                 )
         }
-        Method::DrMmlt => {
-            let layout = dr::dr_layout(params.max_depth);
-            MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings).run(
+        Method::DrMmlt => MltDriver::new(&MmltTarget::all_depths(scene, params, w, h), settings)
+            .run(
                 PerChain(|slot: ChainSlot, p| {
-                    dr::orbital_kernel(layout, DrBase::Mmlt, p, slot.target as u32)
+                    dr::lazy_orbital_kernel(DrBase::Mmlt, p, slot.target as u32, false)
                 }),
                 &NoProgress,
                 &cancel,
-            )
-        }
+            ),
     }
 }
 
@@ -523,6 +541,14 @@ fn mala_variants_match_the_analytic_enclosure() {
     enclosure_case(Method::Mala(MalaVariant::Cache), 9200);
     enclosure_case(Method::Mala(MalaVariant::Hybrid), 9300);
     enclosure_case(Method::CheapThenExpensive, 9400);
+}
+
+#[test]
+fn mala_variants_under_the_paper_values_preset_match_the_analytic_enclosure() {
+    enclosure_case(Method::MalaValues(MalaVariant::Plain), 9050);
+    enclosure_case(Method::MalaValues(MalaVariant::Online), 9150);
+    enclosure_case(Method::MalaValues(MalaVariant::Cache), 9250);
+    enclosure_case(Method::MalaValues(MalaVariant::Hybrid), 9350);
 }
 
 #[test]

@@ -142,6 +142,29 @@ fn mala_luan2020_pins_section_7_and_the_code() {
         (0.005, 5, 3000, 0.005)
     );
     assert_ne!(c, p);
+    // The paper's values with the code's semantics, and the code, read epsilon as a
+    // standard deviation with a floor; both add the code's fallback step (0.1).
+    let v = MalaSettings::luan2020_values().config;
+    assert_eq!(
+        (v.params.epsilon, v.params.neighbours, v.params.cache_size),
+        (0.01, 30, 10_000)
+    );
+    for s in [v, MalaSettings::luan2020_code().config] {
+        assert_eq!(
+            s.params.covariance,
+            mcmc_core::langevin::Covariance::EpsilonSquaredMPlusOne
+        );
+        assert_eq!(s.params.preconditioner_range, [0.01, 100.0]);
+        assert_eq!(s.params.drift_clamp, 5.0);
+        assert!(s.params.radius_per_dimension);
+        assert_eq!(
+            s.params.adam_start,
+            mcmc_core::langevin::AdamStart::FirstVisit
+        );
+        assert_eq!(s.fallback, 0.1);
+    }
+    assert_eq!(m.config.fallback, 0.0);
+    assert!(!m.cheap_then_expensive);
     // The variants (Alg. 2-4) are presets too, each its own table row.
     for (variant, kind) in [
         (MalaVariant::Plain, IntegratorKind::Mala),

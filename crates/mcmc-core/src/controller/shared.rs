@@ -28,6 +28,12 @@ pub trait SharedController<K: ?Sized> {
     fn end_round(pooled: &mut Self::Shared) {
         let _ = pooled;
     }
+    /// One line on the pooled statistics at the end of a run, for the render notes (the
+    /// default: none).
+    fn summary(pooled: &Self::Shared) -> Option<String> {
+        let _ = pooled;
+        None
+    }
     /// True if the pooled statistics make a chain's moves depend on other chains (the
     /// default): a render split into shards ([`crate::render_loop::Shard`]) must then run
     /// every chain in every shard and keep only its own chains' splats. False for
@@ -99,6 +105,12 @@ impl<K: ?Sized, A: SharedController<K>, B: SharedController<K>> SharedController
     fn end_round(pooled: &mut Self::Shared) {
         A::end_round(&mut pooled.0);
         B::end_round(&mut pooled.1);
+    }
+    fn summary(pooled: &Self::Shared) -> Option<String> {
+        match (A::summary(&pooled.0), B::summary(&pooled.1)) {
+            (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+            (a, b) => a.or(b),
+        }
     }
     const COUPLES_CHAINS: bool = A::COUPLES_CHAINS || B::COUPLES_CHAINS;
 }

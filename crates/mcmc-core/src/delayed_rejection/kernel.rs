@@ -249,8 +249,12 @@ impl<P1, P2, A> DelayedRejection<P1, P2, A> {
         let mut num = z.log_density + ln_one_minus(a1_reverse);
         let mut den = x.log_density + ln_one_minus_a1;
         if !matches!(self.rule, DrRule::Orbital) {
-            num += self.first.log_q_component(j, &z.state, &ystar.state);
-            den += self.first.log_q_component(j, &x.state, &y.state);
+            // Only what the second stage moved: the shared factors cancel.
+            let (forward, reverse) =
+                self.first
+                    .log_q_component_pair(j, &z.state, &ystar.state, &x.state, &y.state);
+            num += forward;
+            den += reverse;
             if !self.symmetric_second_stage {
                 num += self.second.log_q(&z.state, &ystar.state, &x.state);
                 den += self.second.log_q(&x.state, &y.state, &z.state);

@@ -1,8 +1,6 @@
 //! The pairwise orbital second stage of delayed rejection (DR paper, section 4.4, Alg. 2
 //! stage 2): each coordinate pair of `z` on the circle centred at the rejected `y` through `x`.
 
-use std::f64::consts::PI;
-
 use rand::Rng;
 
 use super::pairwise::{pairs, Group, Space};
@@ -148,11 +146,10 @@ impl OrbitalWalk {
     ) -> Option<[f64; 2]> {
         let dx = self.space.delta(y[0], x[0]);
         let dy = self.space.delta(y[1], x[1]);
-        let theta = self.angle.sample(rng);
-        if self.space == Space::Torus && dx.hypot(dy) >= 0.5 {
+        let (cos, sin) = self.angle.sample_rotation(rng);
+        if self.space == Space::Torus && dx * dx + dy * dy >= 0.25 {
             return None;
         }
-        let (sin, cos) = theta.sin_cos();
         Some([
             self.space.place(y[0] + cos * dx - sin * dy),
             self.space.place(y[1] + sin * dx + cos * dy),
@@ -178,15 +175,16 @@ impl OrbitalWalk {
                     let (ya, yb) = (read_y(a), read_y(b));
                     let (ux, uy) = (space.delta(ya, read_x(a)), space.delta(yb, read_x(b)));
                     let (vx, vy) = (space.delta(ya, read_z(a)), space.delta(yb, read_z(b)));
-                    let (r, s) = (ux.hypot(uy), vx.hypot(vy));
+                    let r = (ux * ux + uy * uy).sqrt();
+                    let s = (vx * vx + vy * vy).sqrt();
                     if (space == Space::Torus && r >= 0.5)
                         || (r - s).abs() > ORBIT_TOLERANCE * r.max(f64::MIN_POSITIVE)
                     {
                         return f64::NEG_INFINITY;
                     }
                     if r > 0.0 {
-                        let theta = (ux * vy - uy * vx).atan2(ux * vx + uy * vy);
-                        log_q += self.angle.log_pdf(theta.clamp(-PI, PI));
+                        // cos theta of the rotation x -> z about y: eq. 10 needs no angle.
+                        log_q += self.angle.log_pdf_cos((ux * vx + uy * vy) / (r * s));
                     }
                 }
                 Group::Single(a) => {
@@ -244,6 +242,7 @@ mod tests {
     use crate::proposal::Proposal;
     use crate::torus::{displacement, wrap};
     use rand::{RngExt, SeedableRng};
+    use std::f64::consts::PI;
 
     /// Proposals land where their densities are positive; the orbital stage stays on the
     /// orbit, is symmetric there, and wraps on the torus.

@@ -112,6 +112,39 @@ impl WrappedCauchy {
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
         self.quantile(rng.random())
     }
+
+    /// `(cos theta, sin theta)` of `theta = quantile(u)`, without the angle: with
+    /// `tau = tan(theta / 2) = tan(pi (u - 1/2)) / k` (the quantile's inner term), the
+    /// half-angle identities give `cos theta = (1 - tau^2) / (1 + tau^2)` and
+    /// `sin theta = 2 tau / (1 + tau^2)`. The same law as [`WrappedCauchy::quantile`] (the
+    /// same map of `u`, to rounding), at one tangent instead of a tangent, an arctangent and
+    /// a sine-cosine. `u = 0` gives the rotation by `pi`.
+    #[inline]
+    #[must_use]
+    pub fn rotation(&self, u: f64) -> (f64, f64) {
+        let tau = self.inverse_k * (PI * (u - 0.5)).tan();
+        if !tau.is_finite() || tau.abs() > 1e150 {
+            return (-1.0, 0.0);
+        }
+        let t2 = tau * tau;
+        let inv = 1.0 / (1.0 + t2);
+        ((1.0 - t2) * inv, 2.0 * tau * inv)
+    }
+
+    /// One rotation ([`WrappedCauchy::rotation`]) from one uniform of `rng`.
+    #[inline]
+    pub fn sample_rotation<R: Rng + ?Sized>(&self, rng: &mut R) -> (f64, f64) {
+        self.rotation(rng.random())
+    }
+
+    /// The log density (eq. 10) of an angle given by its cosine: `log_pdf(theta)` for
+    /// `cos_theta = cos(theta)` (clamped to `[-1, 1]`), without the angle.
+    #[inline]
+    #[must_use]
+    pub fn log_pdf_cos(&self, cos_theta: f64) -> f64 {
+        let r = self.rho;
+        self.log_numerator - (1.0 + r * r - 2.0 * r * cos_theta.clamp(-1.0, 1.0)).ln()
+    }
 }
 
 impl Default for WrappedCauchy {
@@ -192,6 +225,22 @@ mod tests {
         }
         let uniform = WrappedCauchy::new(0.0).unwrap();
         assert!((uniform.quantile(0.75) - PI / 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rotation_is_the_quantile_without_the_angle() {
+        for rho in [0.0, 0.5, RIOUX_LAVOIE2020_RHO, 0.99] {
+            let wc = WrappedCauchy::new(rho).unwrap();
+            for i in 0..=1000 {
+                let u = i as f64 / 1000.0;
+                let theta = wc.quantile(u);
+                let (c, s) = wc.rotation(u);
+                assert!((c - theta.cos()).abs() < 1e-12, "rho {rho} u {u}");
+                assert!((s - theta.sin()).abs() < 1e-12, "rho {rho} u {u}");
+                assert!((c * c + s * s - 1.0).abs() < 1e-14);
+                assert!((wc.log_pdf_cos(c) - wc.log_pdf(theta)).abs() < 1e-9);
+            }
+        }
     }
 
     #[test]

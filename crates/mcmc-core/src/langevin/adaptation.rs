@@ -349,8 +349,12 @@ impl Adaptation for CacheDriven {
         out: &mut ProposalGaussian,
     ) -> bool {
         let n = u.len();
-        self.view
-            .query(u, params.radius, params.neighbours, &mut self.neighbours);
+        self.view.query(
+            u,
+            params.query_radius(u.len()),
+            params.neighbours,
+            &mut self.neighbours,
+        );
         let include_self = !self.view.is_full()
             && g.len() == n
             && !self.neighbours.iter().any(|nb| nb.dist2 == 0.0);

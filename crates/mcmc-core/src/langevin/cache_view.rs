@@ -34,6 +34,45 @@ pub struct CacheView {
 pub struct PooledCache {
     /// The pooled entries per dimension (absent until a chain contributed one of it).
     pub caches: std::collections::BTreeMap<usize, Arc<GradientCache>>,
+    /// Rounds pooled so far.
+    pub rounds: u64,
+    /// Per dimension, the round after which its pooled cache was full (from then on the
+    /// hybrid's chains of that dimension run frozen cache-driven MALA).
+    pub full_after: std::collections::BTreeMap<usize, u64>,
+}
+
+impl PooledCache {
+    /// Ends a round: counts it and records the dimensions whose caches became full.
+    pub fn end_round(&mut self) {
+        self.rounds += 1;
+        for (&d, cache) in &self.caches {
+            if cache.len() >= cache.capacity() {
+                self.full_after.entry(d).or_insert(self.rounds);
+            }
+        }
+    }
+
+    /// One line on the caches: entries per dimension and when each became full.
+    #[must_use]
+    pub fn summary(&self) -> String {
+        let parts: Vec<String> = self
+            .caches
+            .iter()
+            .map(|(d, c)| match self.full_after.get(d) {
+                Some(r) => format!("{d}-D full after round {r}"),
+                None => format!("{d}-D {}/{}", c.len(), c.capacity()),
+            })
+            .collect();
+        format!(
+            "gradient caches after {} rounds: {}",
+            self.rounds,
+            if parts.is_empty() {
+                "none".to_owned()
+            } else {
+                parts.join(", ")
+            }
+        )
+    }
 }
 
 impl CacheView {

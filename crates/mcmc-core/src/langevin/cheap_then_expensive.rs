@@ -142,6 +142,9 @@ impl<A, Sp, L> CheapThenExpensive<A, Sp, L> {
     where
         Sp: LangevinSpace<S>,
     {
+        if !self.space.same_slice(from, to) {
+            return f64::NEG_INFINITY;
+        }
         let (mut u, mut v) = (Vec::new(), Vec::new());
         self.space.read(from, &mut u);
         self.space.read(to, &mut v);
@@ -470,7 +473,11 @@ where
                 log_sum_exp(&terms)
             }
             [x, y, z] => {
-                if p_local <= 0.0 || x.log_density == f64::NEG_INFINITY {
+                if p_local <= 0.0
+                    || x.log_density == f64::NEG_INFINITY
+                    || !self.space.same_layout(&x.state, &z.state)
+                    || !self.space.same_slice(&x.state, &z.state)
+                {
                     return f64::NEG_INFINITY;
                 }
                 let Some(ghost) = self.ghost_of(&x.state, &y.state, &z.state) else {

@@ -42,8 +42,10 @@ pub struct ProposalGaussian {
 
 impl ProposalGaussian {
     /// Forms the diagonal Gaussian from the preconditioner diagonal `m_diag` (`M_ii`, clamped
-    /// to [`LangevinParams::preconditioner_range`]) and the drift `drift` (`m`):
-    /// `Sigma_ii = 1 / (1 / (epsilon M_ii) + 1 / max_std^2)`, `mu_i = Sigma_ii m_i / 2`.
+    /// to [`LangevinParams::preconditioner_range`]) and the drift `drift` (`m`, clamped to
+    /// [`LangevinParams::drift_clamp`]):
+    /// `Sigma_ii = 1 / (1 / S_ii + 1 / max_std^2)`, `mu_i = Sigma_ii m_i / 2`, with
+    /// `S_ii = epsilon M_ii` or `epsilon^2 (M_ii + 1)` ([`super::Covariance`]).
     pub fn set_diagonal(&mut self, params: &LangevinParams, m_diag: &[f64], drift: &[f64]) {
         debug_assert_eq!(m_diag.len(), drift.len());
         #[cfg(feature = "nalgebra")]
@@ -55,10 +57,17 @@ impl ProposalGaussian {
         let [lo, hi] = params.preconditioner_range;
         let prior = 1.0 / (params.max_std * params.max_std);
         let mut log_norm = 0.0;
+        let c = params.drift_clamp;
         for (&m, &d) in m_diag.iter().zip(drift) {
             let m = m.clamp(lo, hi);
-            let var = 1.0 / (1.0 / (params.epsilon * m) + prior);
-            self.mean.push(0.5 * var * d);
+            let s = match params.covariance {
+                super::Covariance::EpsilonM => params.epsilon * m,
+                super::Covariance::EpsilonSquaredMPlusOne => {
+                    params.epsilon * params.epsilon * (m + 1.0)
+                }
+            };
+            let var = 1.0 / (1.0 / s + prior);
+            self.mean.push(0.5 * var * d.clamp(-c, c));
             let s = var.sqrt();
             self.std.push(s);
             log_norm -= s.ln() + LN_SQRT_2PI;
@@ -73,7 +82,12 @@ impl ProposalGaussian {
     #[cfg(feature = "nalgebra")]
     pub fn set_full(&mut self, params: &LangevinParams, m: &DMatrix<f64>, drift: &[f64]) -> bool {
         let d = drift.len();
-        let mut sigma = m * params.epsilon;
+        let mut sigma = match params.covariance {
+            super::Covariance::EpsilonM => m * params.epsilon,
+            super::Covariance::EpsilonSquaredMPlusOne => {
+                (m + DMatrix::<f64>::identity(d, d)) * (params.epsilon * params.epsilon)
+            }
+        };
         if params.max_std.is_finite() {
             let prior = DMatrix::<f64>::identity(d, d) / (params.max_std * params.max_std);
             let precision = match sigma.clone().try_inverse() {
@@ -88,7 +102,9 @@ impl ProposalGaussian {
         let Some(chol) = nalgebra::Cholesky::new(sigma.clone()) else {
             return self.isotropic_fallback(params, d);
         };
-        let mean = &sigma * DVector::from_column_slice(drift) * 0.5;
+        let c = params.drift_clamp;
+        let drift: Vec<f64> = drift.iter().map(|v| v.clamp(-c, c)).collect();
+        let mean = &sigma * DVector::from_column_slice(&drift) * 0.5;
         self.mean.clear();
         self.mean.extend(mean.iter());
         let l = chol.l();
@@ -240,6 +256,37 @@ impl ProposalGaussian {
 mod tests {
     use super::*;
     use rand::SeedableRng;
+
+    #[test]
+    fn the_code_semantics_floor_the_step_and_clamp_the_drift() {
+        // The paper's text: Sigma = epsilon M, no clamp.
+        let text = LangevinParams::luan2020();
+        let mut q = ProposalGaussian::default();
+        q.set_diagonal(&text, &[0.0001, 100.0], &[40.0, -40.0]);
+        assert!((q.std[0] - (0.01f64 * 0.0001).sqrt()).abs() < 1e-15);
+        assert!((q.mean[0] - 0.5 * 0.01 * 0.0001 * 40.0).abs() < 1e-15);
+        // The paper's values with the code's semantics: Sigma = epsilon^2 (M + 1), M clamped
+        // to [0.01, 100], drift clamped to +-5: sigma from 0.01 to about 0.1.
+        let values = LangevinParams::luan2020_values();
+        q.set_diagonal(&values, &[0.0001, 1e6], &[40.0, -40.0]);
+        let var: [f64; 2] = [1e-4 * 1.01, 1e-4 * 101.0];
+        for (i, v) in var.iter().enumerate() {
+            assert!((q.std[i] - v.sqrt()).abs() < 1e-15, "{i}");
+        }
+        assert!((q.mean[0] - 0.5 * var[0] * 5.0).abs() < 1e-15);
+        assert!((q.mean[1] + 0.5 * var[1] * 5.0).abs() < 1e-15);
+        // The code: the shrink prior's precision is added.
+        let code = LangevinParams::luan2020_code();
+        q.set_diagonal(&code, &[1.0], &[0.0]);
+        let var = 1.0 / (1.0 / (0.005f64 * 0.005 * 2.0) + 1.0 / (0.005f64 * 0.005));
+        assert!((q.std[0] - var.sqrt()).abs() < 1e-15);
+        // Radius per dimension.
+        assert_eq!(text.query_radius(16), 0.01);
+        assert!((values.query_radius(16) - 0.04).abs() < 1e-15);
+        let mut bad = values;
+        bad.drift_clamp = 0.0;
+        assert!(bad.validate().is_err());
+    }
 
     #[cfg(feature = "nalgebra")]
     #[test]

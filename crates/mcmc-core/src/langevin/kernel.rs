@@ -304,6 +304,9 @@ where
     where
         Sp: LangevinSpace<S>,
     {
+        if !self.space.same_layout(from, to) || !self.space.same_slice(from, to) {
+            return f64::NEG_INFINITY;
+        }
         let (mut u, mut v) = (Vec::new(), Vec::new());
         self.space.read(from, &mut u);
         self.space.read(to, &mut v);

@@ -51,6 +51,6 @@ pub use gaussian::ProposalGaussian;
 pub use kernel::{
     HasGradientCache, Langevin, NoMove, FALLBACK_COMPONENT, LARGE_STEP_COMPONENT, MALA_COMPONENT,
 };
-pub use params::{AdamStart, LangevinParams};
+pub use params::{AdamStart, Covariance, LangevinParams};
 pub use sharing::CacheSharing;
 pub use space::LangevinSpace;

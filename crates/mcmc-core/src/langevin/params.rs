@@ -17,6 +17,19 @@ pub enum AdamStart {
     FirstVisit,
 }
 
+/// How the step size and the preconditioner make the proposal covariance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Covariance {
+    /// `Sigma = epsilon M` (the paper's eq. 7, 9, 18, 28: `epsilon` is a variance; with
+    /// `epsilon = 0.01` a standard deviation of 0.1 per coordinate where `M = 1`).
+    #[default]
+    EpsilonM,
+    /// `Sigma = epsilon^2 (M + 1)` (the authors' code, `ComputeGaussian`: `epsilon` is a
+    /// standard deviation, and the `+ 1` is a floor, so no coordinate moves by less than
+    /// `epsilon` however small `M` is).
+    EpsilonSquaredMPlusOne,
+}
+
 /// Parameters of the Metropolis-adjusted Langevin algorithm with adaptation (Luan et al.
 /// 2020, Alg. 1-4). Plain data with
 /// documented defaults ([`LangevinParams::luan2020`]); [`LangevinParams::validate`] checks
@@ -29,6 +42,15 @@ pub enum AdamStart {
 /// clamps the diagonal of `M`, and [`LangevinParams::max_std`] adds a Gaussian "shrink prior"
 /// of that standard deviation to the proposal's precision, `Sigma^-1 + I / max_std^2`
 /// (the authors' code does both; docs/methods/mala.md, "Readings and deliberate departures").
+///
+/// # Presets
+/// Three readings of the same method, named for what they read how:
+///
+/// | preset | values | covariance | `M` clamp | drift clamp | prior | radius | Adam start |
+/// |---|---|---|---|---|---|---|---|
+/// | [`LangevinParams::luan2020`] (paper's text) | `eps` 0.01, `K` 30, `H` 10 000, `r` 0.01 | `eps M` | none | none | none | `r` | zero |
+/// | [`LangevinParams::luan2020_values`] (paper's values, code's semantics) | as the text | `eps^2 (M + 1)` | `[0.01, 100]` | 5 | none | `r sqrt(d)` | first visit |
+/// | [`LangevinParams::luan2020_code`] (the code) | `eps` 0.005, `K` 5, `H` 3000, `r` 0.01 | `eps^2 (M + 1)` | `[0.01, 100]` | 5 | 0.005 | `r sqrt(d)` | first visit |
 ///
 /// # Example
 /// ```
@@ -60,8 +82,20 @@ pub struct LangevinParams {
     /// Diminishing-adaptation exponent `c2` of the momentum (eq. 20). The paper gives no value;
     /// ours: 0.5.
     pub c2: f64,
-    /// Cache query radius `r` (eq. 22). Paper: 0.01.
+    /// Cache query radius `r` (eq. 22). Paper: 0.01. See
+    /// [`LangevinParams::radius_per_dimension`].
     pub radius: f64,
+    /// If true, a query in `d` dimensions uses the radius `r sqrt(d)` (the authors' code:
+    /// nanoflann's squared radius `d r^2`, i.e. `r` per coordinate); if false, `r` (the
+    /// paper's text). In 13-16 dimensions a radius of 0.01 finds almost only exact revisits.
+    pub radius_per_dimension: bool,
+    /// How `epsilon` and `M` make the covariance ([`Covariance`]). Paper:
+    /// [`Covariance::EpsilonM`]; the authors' code: [`Covariance::EpsilonSquaredMPlusOne`].
+    pub covariance: Covariance,
+    /// Every component of the drift vector `m` is clamped to `[-drift_clamp, drift_clamp]`
+    /// (`INFINITY`: none). Paper: none; the authors' code clamps its drift (the momentum) to
+    /// `[-5, 5]` (`MTM_MIN`, `MTM_MAX`).
+    pub drift_clamp: f64,
     /// Cache query neighbours `K`: the query keeps the `K` nearest entries within `r`
     /// (section 7). Paper: 30.
     pub neighbours: usize,
@@ -94,6 +128,9 @@ impl LangevinParams {
             c1: 0.5,
             c2: 0.5,
             radius: 0.01,
+            radius_per_dimension: false,
+            covariance: Covariance::EpsilonM,
+            drift_clamp: f64::INFINITY,
             neighbours: 30,
             cache_size: 10_000,
             preconditioner_range: [0.0, f64::INFINITY],
@@ -102,20 +139,49 @@ impl LangevinParams {
         }
     }
 
-    /// The values of the authors' public code (`dptoptions.h`, `global_cache.h`;
-    /// docs/methods/mala.md): `epsilon = 0.005`, `K = 5`,
-    /// `H = 3000`, preconditioner clamped to `[0.01, 100]`, shrink prior 0.005; the other
-    /// values as [`LangevinParams::luan2020`]. Only the values: our formulas stay the paper's.
+    /// The paper's values (section 7: `epsilon = 0.01`, `K = 30`, `H = 10 000`, `r = 0.01`,
+    /// no shrink prior) read with the authors' code's semantics: covariance
+    /// `epsilon^2 (M + 1)` (a standard deviation from 0.01 to about 0.1), `M` clamped to
+    /// `[0.01, 100]`, drift clamped to `+-5`, query radius `r sqrt(d)`, Adam moments started
+    /// at the first visit and restarted on an accepted large step.
+    #[must_use]
+    pub const fn luan2020_values() -> Self {
+        Self {
+            radius_per_dimension: true,
+            covariance: Covariance::EpsilonSquaredMPlusOne,
+            drift_clamp: 5.0,
+            preconditioner_range: [0.01, 100.0],
+            adam_start: AdamStart::FirstVisit,
+            ..Self::luan2020()
+        }
+    }
+
+    /// The authors' public code (`dptoptions.h`, `global_cache.h`, `mala.cpp`;
+    /// docs/methods/mala.md): `epsilon = 0.005` as a standard deviation (covariance
+    /// `epsilon^2 (M + 1)`), shrink prior 0.005 (precision `1 / (epsilon^2 (M + 1)) +
+    /// 1 / 0.005^2`), `M` clamped to `[0.01, 100]`, drift clamped to `+-5`, `K = 5`,
+    /// `H = 3000`, query radius `0.01 sqrt(d)`, Adam moments started at the first visit and
+    /// restarted on an accepted large step; the other values as [`LangevinParams::luan2020`].
+    /// The drift vector itself stays the paper's (eq. 14, 20: the gradient plus the
+    /// momentum; the code's drift is the momentum alone).
     #[must_use]
     pub const fn luan2020_code() -> Self {
         Self {
             epsilon: 0.005,
             neighbours: 5,
             cache_size: 3000,
-            preconditioner_range: [0.01, 100.0],
             max_std: 0.005,
-            adam_start: AdamStart::FirstVisit,
-            ..Self::luan2020()
+            ..Self::luan2020_values()
+        }
+    }
+
+    /// The query radius in `dim` dimensions ([`LangevinParams::radius_per_dimension`]).
+    #[must_use]
+    pub fn query_radius(&self, dim: usize) -> f64 {
+        if self.radius_per_dimension {
+            self.radius * (dim as f64).sqrt()
+        } else {
+            self.radius
         }
     }
 
@@ -165,6 +231,7 @@ impl LangevinParams {
                 allowed: "0 <= lo <= hi, hi > 0",
             });
         }
+        positive("drift_clamp", self.drift_clamp)?;
         positive("max_std", self.max_std)
     }
 

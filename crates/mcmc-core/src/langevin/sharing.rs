@@ -33,4 +33,10 @@ impl<K: HasGradientCache + ?Sized> SharedController<K> for CacheSharing {
     fn receive(&mut self, kernel: &mut K, pooled: &PooledCache) {
         kernel.for_each_gradient_cache(&mut |view| view.receive(pooled));
     }
+    fn end_round(pooled: &mut PooledCache) {
+        pooled.end_round();
+    }
+    fn summary(pooled: &PooledCache) -> Option<String> {
+        (!pooled.caches.is_empty()).then(|| pooled.summary())
+    }
 }

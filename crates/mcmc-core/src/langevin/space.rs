@@ -38,6 +38,14 @@ pub trait LangevinSpace<S> {
         let _ = (x, y);
         true
     }
+    /// True if a move from `x` can reach `y`: `y` agrees with `x` on every coordinate the
+    /// kernel keeps fixed at `x` (its discrete and unread coordinates). Used by the flows of
+    /// the pairwise checks ([`crate::Kernel::log_flow`]); states whose coordinates are all
+    /// moved: always.
+    fn same_slice(&self, x: &S, y: &S) -> bool {
+        let _ = (x, y);
+        true
+    }
 }
 
 /// Writes `to - from` into a stack buffer (or `spill` beyond 64 dimensions) and calls `f`.

@@ -109,6 +109,17 @@ pub trait Proposal<S> {
         self.log_q(from, to)
     }
 
+    /// `(log q_j(a -> b) - c, log q_j(x -> y) - c)` for some `c` common to both: the two
+    /// first-stage densities of delayed rejection's second-stage ratio (DR paper eq. 6 and
+    /// 12: `Q1_j(y* | z)` over `Q1_j(y | x)`), each without the factors they share. The
+    /// default evaluates both densities whole (`c = 0`); a proposal whose density is a
+    /// product over coordinates may skip the coordinates where `a = x` and `b = y` (those the
+    /// second stage did not move), whose factors are equal. `NEG_INFINITY` entries as
+    /// [`Proposal::log_q_component`] gives them.
+    fn log_q_component_pair(&self, j: usize, a: &S, b: &S, x: &S, y: &S) -> (f64, f64) {
+        (self.log_q_component(j, a, b), self.log_q_component(j, x, y))
+    }
+
     /// The Hastings term `propose` reports for a move `x -> y` through component `j`.
     /// Correct proposals never override this; it exists so that tests can evaluate the
     /// acceptance a kernel *would* compute for any pair, and so that deliberately broken

@@ -7,7 +7,8 @@
 //!   [`mcmc_core::toy`] on the first `d` primary samples of a [`PssState`](crate::PssState);
 //!   [`Eager`] wraps a PSS proposal so that its candidate is fully materialised in `propose`
 //!   (what the pairwise checks need, and the reference of lazy-versus-eager tests).
-//! - **Targets whose read set depends on the state** ([`Stripes`], [`RoulettePath`]): the
+//! - **Targets whose read set depends on the state** ([`Stripes`], [`RoulettePath`],
+//!   [`LobeChoice`], which also has discrete numbers whose set depends on the state): the
 //!   case of path tracers with Russian roulette, varying path length and MMLT strategies,
 //!   where lazy mutation has to be careful (a coordinate the current state has not read for a
 //!   while must not be re-drawn at every proposal). Each has an exact sampler of fully
@@ -35,6 +36,7 @@
 mod broken;
 mod eager;
 mod exact;
+mod lobes;
 mod on_pss;
 mod roulette;
 mod stripes;
@@ -44,6 +46,7 @@ pub use eager::Eager;
 pub use exact::{
     exact_sampler_test, pss_splat_weight_test, pss_stationarity_test, ExactPssTarget, PssBins,
 };
+pub use lobes::LobeChoice;
 pub use on_pss::{OnPss, MAX_FIXED_DIM};
 pub use roulette::RoulettePath;
 pub use stripes::Stripes;

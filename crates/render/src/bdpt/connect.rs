@@ -91,7 +91,7 @@ pub fn connect<S: Sampler + ?Sized>(
         let pt = &camera[t - 1];
         if pt.is_connectible() {
             sampler.start_stream(Stream::Connection);
-            let u_light = sampler.next_1d();
+            let u_light = sampler.next_1d_discrete();
             let u_pos = sampler.next_2d();
             if let Some(ls) = scene_api::sample_li(scene, pt.p, u_light, u_pos) {
                 if ls.radiance != Vec3::ZERO {

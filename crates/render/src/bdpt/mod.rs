@@ -171,7 +171,7 @@ pub fn sample_strategy<S: Sampler + ?Sized>(
         (1usize, 0usize, 2usize)
     } else {
         let n = depth + 2;
-        let s = ((sampler.next_1d() * n as f32) as usize).min(n - 1);
+        let s = ((sampler.next_1d_discrete() * n as f32) as usize).min(n - 1);
         (n, s, n - s)
     };
     sampler.start_stream(Stream::Camera);

@@ -49,6 +49,19 @@ pub(crate) fn generate_ray(scene: SceneRef<'_>, p_raster: Vec2, u_lens: Vec2, u_
     scene.camera().generate_ray(p_raster, u_lens, u_time)
 }
 
+/// True if the camera does not use its lens numbers (a pinhole).
+#[inline]
+pub(crate) fn lens_is_inert(scene: SceneRef<'_>) -> bool {
+    scene.camera().lens_radius() <= 0.0
+}
+
+/// True if the time number changes nothing (the camera does not move; scene geometry is
+/// static).
+#[inline]
+pub(crate) fn time_is_inert(scene: SceneRef<'_>) -> bool {
+    !scene.camera().is_moving()
+}
+
 /// Solid-angle density of the camera emitting `ray` (0 outside the image).
 #[inline]
 pub(crate) fn camera_pdf_dir(scene: SceneRef<'_>, ray: &Ray) -> f32 {

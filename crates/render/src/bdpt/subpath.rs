@@ -148,8 +148,13 @@ pub fn random_walk<S: Sampler + ?Sized>(
             break;
         }
         let wo_local = v.frame.to_local(v.wo);
-        let u = sampler.next_1d();
-        let u2 = sampler.next_2d();
+        // The lobe choice is discrete; a delta BSDF does not use the direction numbers.
+        let u = sampler.next_1d_discrete();
+        let u2 = if hit.bsdf.is_specular() {
+            sampler.next_2d_discrete()
+        } else {
+            sampler.next_2d()
+        };
         let Some(bs) = hit.bsdf.sample(wo_local, u, u2, mode) else {
             break;
         };
@@ -185,7 +190,7 @@ pub fn random_walk<S: Sampler + ?Sized>(
         if let Some(start) = roulette.start {
             if added as u32 >= start {
                 let q = max_component(factor).min(0.95);
-                if q <= 0.0 || sampler.next_1d() >= q {
+                if q <= 0.0 || sampler.next_1d_discrete() >= q {
                     break;
                 }
                 beta /= q;
@@ -217,8 +222,17 @@ pub fn camera_subpath<S: Sampler + ?Sized>(
         return 0;
     }
     sampler.start_stream(Stream::Camera);
-    let u_lens = sampler.next_2d();
-    let u_time = sampler.next_1d();
+    // A pinhole does not use the lens numbers, a static camera not the time.
+    let u_lens = if scene_api::lens_is_inert(scene) {
+        sampler.next_2d_discrete()
+    } else {
+        sampler.next_2d()
+    };
+    let u_time = if scene_api::time_is_inert(scene) {
+        sampler.next_1d_discrete()
+    } else {
+        sampler.next_1d()
+    };
     let ray = scene_api::generate_ray(scene, p_raster, u_lens, u_time);
     let pdf_dir = scene_api::camera_pdf_dir(scene, &ray);
     path[0] = Vertex::camera(
@@ -259,7 +273,7 @@ pub fn light_subpath<S: Sampler + ?Sized>(
         return 0;
     }
     sampler.start_stream(Stream::Light);
-    let u_light = sampler.next_1d();
+    let u_light = sampler.next_1d_discrete();
     let u_pos = sampler.next_2d();
     let u_dir = sampler.next_2d();
     let Some(le) = scene_api::sample_le(scene, u_light, u_pos, u_dir) else {

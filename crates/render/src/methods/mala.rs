@@ -2,7 +2,10 @@
 //! MMLT: MALA small steps on shallow depths with plain, online, cache-driven or hybrid
 //! adaptation of the preconditioner, Kelemen steps beyond ([`crate::mlt::mala`]).
 
-use mcmc_core::langevin::LangevinParams;
+use mcmc_core::langevin::{
+    LangevinParams, FALLBACK_COMPONENT, LARGE_STEP_COMPONENT, MALA_COMPONENT,
+};
+use mcmc_core::stats::AcceptanceStats;
 
 use super::direct_pass::{self, DirectSettings};
 use super::{
@@ -29,6 +32,12 @@ pub struct MalaSettings {
     /// two segments, our depths 0 and 1, by a separate 256-spp pass; the paper's text does
     /// not say).
     pub direct: DirectSettings,
+    /// Run the cheap-then-expensive delayed-rejection kernel (DR paper section 5.2: an
+    /// isotropic Gaussian of `config.cheap_sigma`, then plain MALA) in place of the
+    /// variant's MALA, with the same direct pass, chains and large steps as the `mala*`
+    /// rows (for comparisons; the command line's is `drmlt --dr-variant
+    /// cheap-then-expensive`). Default false.
+    pub cheap_then_expensive: bool,
 }
 
 impl Default for MalaSettings {
@@ -39,22 +48,41 @@ impl Default for MalaSettings {
 }
 
 impl MalaSettings {
-    /// The paper's method (Luan et al. 2020): hybrid adaptation (Alg. 4, the paper's main
-    /// algorithm) with section 7's parameters, epsilon 0.01, K = 30 neighbours, cache size
-    /// H = 10 000 ([`LangevinParams::luan2020`]); MALA on MMLT depths up to 3, Kelemen steps
-    /// beyond; gradients by forward-mode dual numbers.
+    /// The paper's method as its text reads (Luan et al. 2020): hybrid adaptation (Alg. 4,
+    /// the paper's main algorithm) with section 7's parameters, epsilon 0.01 as the variance
+    /// of eq. 7 (`Sigma = epsilon M`), K = 30 neighbours within radius 0.01, cache size
+    /// H = 10 000, Adam accumulators from zero ([`LangevinParams::luan2020`]); MALA on MMLT
+    /// depths up to 3, Kelemen steps beyond; gradients by forward-mode dual numbers.
     #[must_use]
     pub const fn luan2020() -> Self {
         Self::luan2020_variant(MalaVariant::Hybrid)
     }
 
-    /// [`MalaSettings::luan2020`] with the authors' code's constants
-    /// ([`LangevinParams::luan2020_code`]: step 0.005, K = 5, H = 3000, preconditioner
-    /// clamped to [0.01, 100], shrink prior 0.005) where they differ from the text.
+    /// The paper's values read with the authors' code's semantics
+    /// ([`LangevinParams::luan2020_values`]: epsilon 0.01 as a standard deviation with a
+    /// floor, covariance `epsilon^2 (M + 1)`, `M` in `[0.01, 100]`, drift clamped to `+-5`,
+    /// K = 30 within `0.01 sqrt(d)`, H = 10 000, first-visit Adam start), plus the code's
+    /// fallback step (probability 0.1, sigma 0.01 on every coordinate).
+    #[must_use]
+    pub const fn luan2020_values() -> Self {
+        let mut s = Self::luan2020();
+        let p = pss::mala::MalaParams::luan2020_values();
+        s.config.params = p.langevin;
+        s.config.fallback = p.fallback;
+        s
+    }
+
+    /// The authors' code ([`LangevinParams::luan2020_code`]: epsilon 0.005 as a standard
+    /// deviation, shrink prior 0.005, `M` in `[0.01, 100]`, drift clamped to `+-5`, K = 5
+    /// within `0.01 sqrt(d)`, H = 3000, first-visit Adam start), plus its fallback step
+    /// (probability 0.1). The code's large-step schedule (0.05 for the first tenth of a
+    /// chain, then 0.2) is not reproduced: the large step stays the chain settings'.
     #[must_use]
     pub const fn luan2020_code() -> Self {
         let mut s = Self::luan2020();
-        s.config.params = LangevinParams::luan2020_code();
+        let p = pss::mala::MalaParams::luan2020_code();
+        s.config.params = p.langevin;
+        s.config.fallback = p.fallback;
         s
     }
 
@@ -71,8 +99,11 @@ impl MalaSettings {
                 gradient: GradientMethod::Dual,
                 fd_step: 1e-4,
                 cheap_sigma: 1.0 / 64.0,
+                fallback: 0.0,
+                cache_round: mala::CACHE_ROUND_MUTATIONS,
             },
             direct: Self::AUTHORS_DIRECT,
+            cheap_then_expensive: false,
         }
     }
 
@@ -105,17 +136,56 @@ pub(super) fn mala_note(config: &MalaConfig) -> String {
              differences, h = {:e}, where they do not apply)",
             config.fd_step
         ),
+        GradientMethod::DualConstantMis => format!(
+            "gradients by forward-mode dual numbers with the MIS weight held constant \
+             (--mala-gradient dual-constant-mis; central finite differences, h = {:e}, where \
+             they do not apply)",
+            config.fd_step
+        ),
         GradientMethod::FiniteDifference => format!(
             "gradients by central finite differences (--mala-gradient fd, h = {:e})",
             config.fd_step
         ),
     };
+    let covariance = match config.params.covariance {
+        mcmc_core::langevin::Covariance::EpsilonM => "covariance epsilon M",
+        mcmc_core::langevin::Covariance::EpsilonSquaredMPlusOne => "covariance epsilon^2 (M + 1)",
+    };
     format!(
-        "Langevin MLT: {} (epsilon {}, truncation {}), MALA on MMLT depths <= {} and Kelemen beyond; {gradients}",
+        "Langevin MLT: {} (epsilon {}, {covariance}, truncation {}, fallback {}), MALA on the continuous primary samples of MMLT depths <= {} and Kelemen beyond; {gradients}",
         config.variant.name(),
         config.params.epsilon,
         config.params.max_gradient,
+        config.fallback,
         config.max_depth,
+    )
+}
+
+/// One line on the acceptance per kind of step: the Langevin proposals (component
+/// [`MALA_COMPONENT`]; with `--max-depth` above the MALA depth it also counts the Kelemen
+/// small steps of the deeper chains), the large steps and the fallback steps.
+pub(super) fn langevin_acceptance_note(
+    stats: &AcceptanceStats,
+    config: &MalaConfig,
+    common: &RenderSettings,
+) -> String {
+    let part = |j: usize, what: &str| {
+        format!(
+            "{what} {:.3} of {}",
+            stats.component_acceptance_rate(j),
+            stats.proposed[j]
+        )
+    };
+    let deeper = if common.max_depth > config.max_depth {
+        " (with the Kelemen small steps of depths beyond the MALA depth)"
+    } else {
+        ""
+    };
+    format!(
+        "acceptance by step: {}{deeper}, {}, {}",
+        part(MALA_COMPONENT, "Langevin"),
+        part(LARGE_STEP_COMPONENT, "large"),
+        part(FALLBACK_COMPONENT, "fallback"),
     )
 }
 
@@ -156,7 +226,7 @@ impl Method for MalaSettings {
             scene,
             params,
             &self.config,
-            false,
+            self.cheap_then_expensive,
             &mlt_settings,
             self.chain.small_step,
             min_depth,
@@ -164,6 +234,9 @@ impl Method for MalaSettings {
             run.cancel,
         );
         let chains_ran = out.mutations > 0;
+        if chains_ran {
+            notes.push(langevin_acceptance_note(&out.stats, &self.config, common));
+        }
         let mut output = mcmc_output(out, notes, run.start.elapsed());
         if let Some(d) = direct {
             direct_pass::merge_into(d, &mut output, common, run, chains_ran);

@@ -202,7 +202,7 @@ fn chain_bytes(method: &MethodSettings, depth: u32) -> u64 {
         MethodSettings::Drmlt(DrmltSettings { variant, on, .. }) => match (variant, on) {
             (DrVariant::CheapThenExpensive, _) => 12 * KIB,
             (_, DrBase::Mmlt) => 20 * KIB + 128 * d,
-            (_, DrBase::Pssmlt) => 8 * KIB + 3 * KIB * d,
+            (_, DrBase::Pssmlt | DrBase::PssmltPt) => 8 * KIB + 3 * KIB * d,
         },
         // One depth per chain, most of them shallow.
         MethodSettings::Mmlt(_) => 8 * KIB + 64 * d,

@@ -1,13 +1,15 @@
 //! Delayed-rejection MLT (Rioux-Lavoie et al. 2020, docs/methods/drmlt.md)
 //! on the path samplers: the kernels of `mcmc_core::delayed_rejection` with the pairwise
-//! primary-sample-space stages of `pss` ([`pss::OnLayout`]).
+//! primary-sample-space stages of `pss` ([`pss::OnLayout`], [`pss::LazyPairwise`]).
 //!
 //! The kernels are `pss`'s renderer-agnostic recipes ([`pss::dr`]: every variant *bold then
 //! timid*, section 5.1, the second stage only after a rejected small step); this module keeps
-//! what is specific to BDPT and MMLT:
-//! - the pair layout, sized from the maximum path depth to cover what BDPT reads
-//!   ([`dr_layout`]); coordinates beyond it are renewed by large steps only (exact, see
-//!   [`pss::OnLayout`]);
+//! what is specific to BDPT, the path tracer and MMLT:
+//! - the orbital rule needs no layout ([`lazy_orbital_kernel`]: every pair of every stream,
+//!   computed where the path sampler reads); the other rules move a fixed layout per chain,
+//!   sized to what the path sampler reads ([`dr_layout`] for BDPT, [`pt_layout`] for the path
+//!   tracer, [`mmlt_layout`] per MMLT depth; [`chain_layout`]); coordinates beyond it are
+//!   renewed by large steps only (exact, see [`pss::OnLayout`]);
 //! - the second stage's streams. On MMLT (`DrBase::Mmlt`, section 5.1.2) the second stage
 //!   moves only the camera stream: the light subpath and the strategy choice (the first number
 //!   of the connection stream) stay fixed. Light-tracing strategies (t = 1, "Handling Light
@@ -17,10 +19,12 @@
 //!   [`LightTracing`]; the second stage never moves the strategy coordinate, so the reverse
 //!   path sees the same strategy and the choice is symmetric).
 //!
-//! Our reading where the paper fixes the MMLT strategy along the whole chain: the bold first
-//! stage here moves every stream's layout, strategy coordinate included, so a first-stage
+//! Our reading where the paper fixes the MMLT strategy along the whole chain: by default the
+//! bold first stage moves every stream, strategy coordinate included, so a first-stage
 //! candidate may change strategy (an exact move of the MMLT target; it is then judged by the
-//! usual acceptance). Only the second stage keeps the strategy.
+//! usual acceptance), and only the second stage keeps the strategy. [`lazy_orbital_kernel`]
+//! with `fixed_strategy` is the paper's chain: neither stage moves it, large steps draw it
+//! afresh.
 
 use mcmc_core::delayed_rejection::IndependentSecondStage;
 use mcmc_core::DelayedRejection;
@@ -29,7 +33,8 @@ use pss::dr::{
     StageChoice,
 };
 use pss::{
-    LayoutGhost, OnLayout, Orbital, PairLayout, PairwiseKelemen, PairwiseMltProposal, PssState,
+    LayoutGhost, LazyOrbital, LazyPairParams, LazyPairwise, OnLayout, Orbital, PairLayout,
+    PairwiseKelemen, PairwiseMltProposal, PssState,
 };
 
 use super::PATH_STREAMS;
@@ -45,7 +50,8 @@ pub enum DrVariant {
     /// Green & Mira 2001 with the fictional state (eq. 12-14), the authors' stages as
     /// [`DrVariant::TierneyMira`] ([`pss::dr::green_mira_kernel`]).
     GreenMira,
-    /// The pairwise orbital rule (eq. 11) — the paper's recommended variant.
+    /// The pairwise orbital rule (eq. 11) — the paper's recommended variant — with stages
+    /// that cost what a path reads ([`lazy_orbital_kernel`]).
     #[default]
     Orbital,
     /// Tierney & Mira over this crate's pairwise stages: the orbital variant's pairwise polar
@@ -88,6 +94,10 @@ pub enum DrBase {
     /// PSSMLT over BDPT (section 5.1.1).
     #[default]
     Pssmlt,
+    /// PSSMLT over the unidirectional path tracer with next-event estimation
+    /// ([`crate::mlt::PtTarget`]; the paper's PSSMLT results ran "atop a PSSMLT path tracer",
+    /// section 5.1.1). The second stage moves every stream, as on [`DrBase::Pssmlt`].
+    PssmltPt,
     /// Multiplexed MLT (section 5.1.2): stage 2 on the camera subpath only.
     Mmlt,
 }
@@ -117,6 +127,59 @@ pub fn dr_layout(max_depth: u32) -> PairLayout {
     PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
 }
 
+/// Numbers per scattering vertex MMLT's subpaths read (lobe 1, direction 2; no roulette).
+const MMLT_PER_VERTEX: usize = 3;
+
+/// The coordinates the pairwise stages move on the MMLT chain of depth `depth` (the chain's
+/// target is fixed, so the layout is a per-chain constant and the stages stay symmetric):
+/// what `crate::bdpt::sample_strategy` reads for any strategy `(s, t)`, `s + t = depth + 2`.
+/// Camera stream: raster 2 + lens 2 + time 1 + 3 per vertex; light stream: light 1 +
+/// position 2 + direction 2 + 3 per vertex; at most `depth + 1` vertices each; connection
+/// stream: the strategy choice and one connection (at most 3). Sizes rounded up to even.
+/// The DR authors size their vector per MMLT depth too, `(depth + 2) * 3`. A depth-1 chain
+/// moves 28 coordinates, a depth-5 chain 52, where [`dr_layout`] moves 96 at max depth 5.
+#[must_use]
+pub fn mmlt_layout(depth: u32) -> PairLayout {
+    let d = depth.min(crate::bdpt::MAX_PATH_DEPTH) as usize;
+    let even = |n: usize| n + n % 2;
+    let subpath = even(5 + MMLT_PER_VERTEX * (d + 1));
+    let mut dims = [0usize; PATH_STREAMS];
+    dims[Stream::Camera.index()] = subpath;
+    dims[Stream::Light.index()] = subpath;
+    dims[Stream::Connection.index()] = 4;
+    PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
+}
+
+/// Numbers per bounce the path tracer reads (light choice 1, light position 2, lobe 1,
+/// direction 2, roulette 1: `crate::integrator::pt`).
+const PT_PER_BOUNCE: usize = 7;
+
+/// The coordinates the pairwise stages move on PSSMLT over the path tracer
+/// ([`crate::mlt::PtTarget`]): raster 2 + lens 2 + time 1 + 7 per bounce of the camera
+/// stream, for paths of at most `max_depth` bounces (plus one for the last emitter hit);
+/// rounded up to even.
+#[must_use]
+pub fn pt_layout(max_depth: u32) -> PairLayout {
+    let d = max_depth.min(crate::bdpt::MAX_PATH_DEPTH) as usize;
+    let camera = 5 + PT_PER_BOUNCE * (d + 1);
+    let mut dims = [0usize; PATH_STREAMS];
+    dims[Stream::Camera.index()] = camera + camera % 2;
+    PairLayout::new(PATH_STREAMS, &dims).unwrap_or_else(|_| unreachable!("valid dimensions"))
+}
+
+/// The layout of a chain on `base` (for the rules with fixed layouts; the orbital rule needs
+/// none, [`lazy_orbital_kernel`]): [`dr_layout`]`(max_depth)` on PSSMLT (one target of every
+/// depth), [`pt_layout`]`(max_depth)` over the path tracer, [`mmlt_layout`]`(depth)` on MMLT
+/// (the chain's depth).
+#[must_use]
+pub fn chain_layout(base: DrBase, max_depth: u32, depth: u32) -> PairLayout {
+    match base {
+        DrBase::Pssmlt => dr_layout(max_depth),
+        DrBase::PssmltPt => pt_layout(max_depth),
+        DrBase::Mmlt => mmlt_layout(depth),
+    }
+}
+
 /// The radius scale of the timid second stage (moved to [`pss::dr`]).
 pub use pss::dr::TIMID_SCALE;
 
@@ -124,7 +187,7 @@ pub use pss::dr::TIMID_SCALE;
 #[must_use]
 pub fn second_stage_streams(base: DrBase) -> u8 {
     match base {
-        DrBase::Pssmlt => pss::ALL_STREAMS,
+        DrBase::Pssmlt | DrBase::PssmltPt => pss::ALL_STREAMS,
         DrBase::Mmlt => 1 << Stream::Camera.index(),
     }
 }
@@ -198,6 +261,35 @@ pub fn orbital_kernel(
     depth: u32,
 ) -> DelayedRejection<PairwiseMltProposal, ByStrategy<OnLayout<Orbital>>> {
     pss::dr::orbital_kernel(layout, p_large, strategy_streams(base, depth))
+}
+
+/// The orbital kernel at the cost of what a path reads (`depth` as [`orbital_kernel`]):
+/// [`pss::dr::lazy_orbital_kernel`] with [`strategy_streams`]. No layout: every pair of every
+/// stream moves, computed only where the path sampler reads ([`pss::LazyPairwise`]). What
+/// [`DrVariant::Orbital`] runs.
+///
+/// With `fixed_strategy` on MMLT, the paper's chain (section 5.1.2; the authors' code mutates
+/// the strategy number with the identity kernel): neither stage moves MMLT's strategy
+/// choice, the first number of the connection stream ([`LazyPairParams::fixed_first`]);
+/// large steps draw it afresh with everything else (the authors' large step resamples the
+/// whole state). Exact: keeping a coordinate is its own reverse move in both stages, the
+/// kept coordinate is fixed per stream (not per state), so the rest pairs up the same way
+/// from every state, and eq. 11's `Q1(y | z) = Q1(y | x)` holds pair by pair as before; the
+/// second stage's light-tracing choice reads the kept number, as it already must.
+#[must_use]
+pub fn lazy_orbital_kernel(
+    base: DrBase,
+    p_large: f64,
+    depth: u32,
+    fixed_strategy: bool,
+) -> DelayedRejection<PairwiseMltProposal<LazyPairwise>, ByStrategy<LazyOrbital>> {
+    let fixed = if fixed_strategy && base == DrBase::Mmlt {
+        1 << Stream::Connection.index()
+    } else {
+        0
+    };
+    let params = LazyPairParams::default().with_fixed_first(fixed);
+    pss::dr::lazy_orbital_kernel_with(params, p_large, strategy_streams(base, depth))
 }
 
 /// The authors' Tierney-Mira kernel (`depth` as [`orbital_kernel`]):

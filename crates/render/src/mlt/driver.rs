@@ -297,7 +297,10 @@ where
                     progress,
                     cancel,
                 );
-                finish(out, &self.settings, p, |_| None)
+                let summary = out.as_ref().ok().and_then(|o| C::summary(&o.shared));
+                let mut output = finish(out, &self.settings, p, |_| None);
+                output.notes.extend(summary);
+                output
             }
             LargeStepMode::Auto {
                 initial,
@@ -312,14 +315,17 @@ where
                     progress,
                     cancel,
                 );
-                finish(
+                let summary = out.as_ref().ok().and_then(|o| C::summary(&o.shared.1));
+                let mut output = finish(
                     out,
                     &self.settings,
                     initial,
                     |pooled: &(LargeStepStats, C::Shared)| {
                         (pooled.0.steps() > 0).then(|| pooled.0.estimate())
                     },
-                )
+                );
+                output.notes.extend(summary);
+                output
             }
         }
     }

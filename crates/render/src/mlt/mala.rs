@@ -12,9 +12,13 @@
 //!   section 7 rule stated by path depth: our layout reads about 4 numbers per vertex — camera
 //!   stream: raster 2 + lens 2 + time 1 + 4 per bounce; light stream: 5 + 4 per bounce;
 //!   connection stream: the strategy choice plus up to 3 — so the default depth 3 moves at
-//!   most about 20 coordinates; docs/methods/mala.md has the measured dimensions). A MALA
-//!   candidate that reads a different set of coordinates than the current state (another
-//!   strategy, a path that ends early) is rejected ([`pss::langevin::PssCoordinates`]).
+//!   most about 20 coordinates; docs/methods/mala.md has the measured dimensions). The path
+//!   evaluator tags the numbers it consumes as discrete choices or not at all (strategy,
+//!   light and lobe choices, a delta BSDF's direction numbers, a pinhole's lens, a static
+//!   camera's time: `Sampler::next_1d_discrete`); MALA moves and differentiates only the
+//!   others. A MALA candidate that reads a different set of coordinates than the current
+//!   state (another strategy, a path that ends early) or tags others discrete is rejected
+//!   ([`pss::langevin::PssCoordinates`]).
 //! - **Variants** (`--integrator`, [`MalaVariant`]): `mala` (plain, eq. 7), `mala-online`
 //!   (Alg. 2, diminishing adaptation), `mala-cache` (Alg. 3), `mala-hybrid` (Alg. 4); each
 //!   mixed with the large step of the MCMC settings. The caches of `mala-cache` and
@@ -28,11 +32,10 @@ use std::cell::RefCell;
 
 use mcmc_core::langevin::{CacheSharing, LangevinParams};
 use mcmc_core::{DifferentiableTarget, Target};
-use pss::langevin::moved_indices;
-use pss::mala::MalaParams;
+use pss::langevin::{moved_count, moved_indices};
 use pss::{Pending, PssState, SmallMutation};
 
-pub use pss::mala::{MalaChainKernel, MalaVariant};
+pub use pss::mala::{MalaChainKernel, MalaParams, MalaVariant};
 
 use super::{MmltTarget, PathPayload, PATH_STREAMS};
 use crate::bdpt::diff::{DiffScene, Dual, Evaluation};
@@ -46,14 +49,19 @@ pub enum GradientMethod {
     /// between the f32 and f64 arithmetic).
     #[default]
     Dual,
+    /// As [`GradientMethod::Dual`], with the strategy's MIS weight held constant (computed
+    /// from the values, not differentiated): the gradient of the log of the unweighted
+    /// contribution. Cheaper; still exact, as every deterministic gradient function is.
+    DualConstantMis,
     /// Central finite differences of the f32 evaluator (one-sided near a structure change).
     FiniteDifference,
 }
 
 impl GradientMethod {
     /// The methods with their `--mala-gradient` names.
-    pub const ALL: [(&'static str, GradientMethod); 2] = [
+    pub const ALL: [(&'static str, GradientMethod); 3] = [
         ("dual", GradientMethod::Dual),
+        ("dual-constant-mis", GradientMethod::DualConstantMis),
         ("fd", GradientMethod::FiniteDifference),
     ];
 }
@@ -76,7 +84,20 @@ pub struct MalaConfig {
     /// Standard deviation of the cheap first stage of `--dr-variant cheap-then-expensive`
     /// (default 1/64, Kelemen 2002's `s2`).
     pub cheap_sigma: f64,
+    /// Probability of the fallback step ([`MalaParams::fallback`]; default 0, the paper's
+    /// text).
+    pub fallback: f64,
+    /// Mutations per chain between two poolings of the gradient caches of `mala-cache` and
+    /// `mala-hybrid` (the render loop's round length; default [`CACHE_ROUND_MUTATIONS`]).
+    /// Short rounds let the shared cache fill within short renders; the pooling order is
+    /// fixed, so the image stays identical for any thread count.
+    pub cache_round: u64,
 }
+
+/// Default [`MalaConfig::cache_round`]: 64 mutations per chain (like path-space MLT's
+/// adaptation rounds; the render loop's default round is 1000, which pools a 3 s render's
+/// caches about once).
+pub const CACHE_ROUND_MUTATIONS: u64 = 64;
 
 impl Default for MalaConfig {
     fn default() -> Self {
@@ -88,6 +109,8 @@ impl Default for MalaConfig {
             gradient: GradientMethod::Dual,
             fd_step: 1e-4,
             cheap_sigma: p.cheap_sigma,
+            fallback: p.fallback,
+            cache_round: CACHE_ROUND_MUTATIONS,
         }
     }
 }
@@ -102,6 +125,7 @@ impl MalaConfig {
             langevin: self.params,
             max_depth: self.max_depth,
             cheap_sigma: self.cheap_sigma,
+            fallback: self.fallback,
         }
     }
 }
@@ -119,7 +143,8 @@ thread_local! {
 ///
 /// - [`GradientMethod::Dual`] (default): the f32 evaluator gives the value
 ///   the chain uses; the differentiable evaluator [`crate::bdpt::diff`] replays the same path
-///   in forward-mode dual numbers (one lane per coordinate read, 8/16/24/32 lanes) and gives
+///   in forward-mode dual numbers (one lane per *continuous* coordinate read, 4/8/12/16/24/32
+///   lanes; discrete numbers are constants of the replay) and gives
 ///   `d ln L / du = (dL/du) / L`. Where it does not apply it falls back to finite
 ///   differences.
 /// - [`GradientMethod::FiniteDifference`]: central differences of the f32 evaluator with step
@@ -154,6 +179,9 @@ impl<'s> DifferentiableMmlt<'s> {
     #[must_use]
     pub fn with_method(mut self, method: GradientMethod) -> Self {
         self.method = method;
+        self.diff = self
+            .diff
+            .map(|d| d.with_constant_mis(method == GradientMethod::DualConstantMis));
         self
     }
 
@@ -163,37 +191,49 @@ impl<'s> DifferentiableMmlt<'s> {
         self.target.depth()
     }
 
-    /// The dual-number gradient of `ln L` at `x` (already evaluated) into `grad`, or false
-    /// where the evaluator does not apply.
+    /// The dual-number gradient of `ln L` at `x` (already evaluated) into `grad`, one entry
+    /// per continuous read ([`pss::langevin::PssCoordinates`] order), or false where the
+    /// evaluator does not apply.
     fn dual_gradient(&self, x: &PssState, grad: &mut Vec<f64>) -> bool {
         let counts = x.read_counts();
         if x.streams() != PATH_STREAMS || counts[PATH_STREAMS..].iter().any(|&c| c != 0) {
             return false;
         }
-        let n: usize = counts[..PATH_STREAMS].iter().sum();
+        let continuous = continuous_counts(x);
+        let n: usize = continuous.iter().sum();
         match n {
-            0..=8 => self.dual_lanes::<8>(x, n, grad),
-            9..=16 => self.dual_lanes::<16>(x, n, grad),
-            17..=24 => self.dual_lanes::<24>(x, n, grad),
-            25..=32 => self.dual_lanes::<32>(x, n, grad),
+            0..=4 => self.dual_lanes::<4>(x, continuous, grad),
+            5..=8 => self.dual_lanes::<8>(x, continuous, grad),
+            9..=12 => self.dual_lanes::<12>(x, continuous, grad),
+            13..=16 => self.dual_lanes::<16>(x, continuous, grad),
+            17..=24 => self.dual_lanes::<24>(x, continuous, grad),
+            25..=32 => self.dual_lanes::<32>(x, continuous, grad),
             _ => false,
         }
     }
 
-    fn dual_lanes<const N: usize>(&self, x: &PssState, n: usize, grad: &mut Vec<f64>) -> bool {
+    fn dual_lanes<const N: usize>(
+        &self,
+        x: &PssState,
+        continuous: [usize; PATH_STREAMS],
+        grad: &mut Vec<f64>,
+    ) -> bool {
         let Some(diff) = &self.diff else {
             return false;
         };
         let (_, params, size) = self.target.parts();
         let counts = x.read_counts();
-        let lanes = [0, counts[0], counts[0] + counts[1]];
-        let e = diff.evaluate::<Dual<N>>(
+        let mask = x.discrete_mask();
+        let lanes = [0, continuous[0], continuous[0] + continuous[1]];
+        let n = lanes[2] + continuous[2];
+        let e = diff.evaluate_continuous::<Dual<N>>(
             self.target.depth(),
             size,
             params.heuristic,
             x.raw_values(),
             PATH_STREAMS,
             lanes,
+            [mask[0], mask[1], mask[2]],
             Dual::variable,
         );
         let (Evaluation::Contribution { reads, .. }, Some(lum)) = (&e, e.luminance()) else {
@@ -215,6 +255,20 @@ impl<'s> DifferentiableMmlt<'s> {
     }
 }
 
+/// Per path stream, the number of continuous reads of `x`'s last evaluation.
+fn continuous_counts(x: &PssState) -> [usize; PATH_STREAMS] {
+    let counts = x.read_counts();
+    let mask = x.discrete_mask();
+    std::array::from_fn(|s| {
+        let below = if counts[s] >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << counts[s]) - 1
+        };
+        counts[s] - (mask[s] & below).count_ones() as usize
+    })
+}
+
 impl Target for DifferentiableMmlt<'_> {
     type State = PssState;
     type Payload = PathPayload;
@@ -233,27 +287,30 @@ impl DifferentiableTarget for DifferentiableMmlt<'_> {
     ) -> f64 {
         let value = self.target.evaluate(x, payload);
         grad.clear();
-        if value.is_finite() && self.method == GradientMethod::Dual && self.dual_gradient(x, grad) {
+        let dual = matches!(
+            self.method,
+            GradientMethod::Dual | GradientMethod::DualConstantMis
+        );
+        if value.is_finite() && dual && self.dual_gradient(x, grad) {
             return value;
         }
         grad.clear();
         if !value.is_finite() {
-            let mut n = Vec::new();
-            moved_indices(x, &mut n);
-            grad.resize(n.len(), 0.0);
+            grad.resize(moved_count(x), 0.0);
             return value;
         }
         PROBE.with(|cell| {
             let (probe, probe_payload, indices) = &mut *cell.borrow_mut();
             moved_indices(x, indices);
-            let counts = x.read_counts();
+            let (counts, mask) = (x.read_counts(), x.discrete_mask());
             let key = mcmc_core::seed::mix64(x.key() ^ 0x4644_4752_4144_2121);
             let mut side = |i: usize, v: f64| -> Option<f64> {
                 probe.clone_from(x);
                 probe.set_pending(Pending::None, key);
                 probe.set(i, v);
                 let lp = self.target.evaluate(probe, probe_payload);
-                (lp.is_finite() && probe.read_counts() == counts).then_some(lp)
+                (lp.is_finite() && probe.read_counts() == counts && probe.discrete_mask() == mask)
+                    .then_some(lp)
             };
             let values = x.raw_values();
             for &i in indices.iter() {
@@ -348,19 +405,21 @@ pub fn render_from_depth(
         .into_iter()
         .map(|t| DifferentiableMmlt::new(t, config.fd_step).with_method(config.gradient))
         .collect();
-    super::MltDriver::new(&targets, settings)
-        .first_depth(min_depth)
-        .run_with_controller(
-            super::PerChain(|slot: mcmc_core::render_loop::ChainSlot, p| {
-                let depth = targets[slot.target].depth();
-                if cheap_then_expensive {
-                    cheap_then_expensive_kernel(config, depth, small, p)
-                } else {
-                    mala_kernel(config, depth, small, p)
-                }
-            }),
-            |_| CacheSharing,
-            progress,
-            cancel,
-        )
+    let mut driver = super::MltDriver::new(&targets, settings).first_depth(min_depth);
+    if config.variant.has_cache() && !cheap_then_expensive {
+        driver = driver.round_mutations(config.cache_round);
+    }
+    driver.run_with_controller(
+        super::PerChain(|slot: mcmc_core::render_loop::ChainSlot, p| {
+            let depth = targets[slot.target].depth();
+            if cheap_then_expensive {
+                cheap_then_expensive_kernel(config, depth, small, p)
+            } else {
+                mala_kernel(config, depth, small, p)
+            }
+        }),
+        |_| CacheSharing,
+        progress,
+        cancel,
+    )
 }

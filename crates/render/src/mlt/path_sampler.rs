@@ -34,6 +34,15 @@ impl Sampler for PssState {
         let x = self.next_1d();
         Vec2::new(x, self.next_1d())
     }
+    #[inline]
+    fn next_1d_discrete(&mut self) -> f32 {
+        (self.next_discrete() as f32).min(ONE_MINUS_EPSILON)
+    }
+    #[inline]
+    fn next_2d_discrete(&mut self) -> Vec2 {
+        let x = self.next_1d_discrete();
+        Vec2::new(x, self.next_1d_discrete())
+    }
 }
 
 /// Number of PSS streams the path samplers read.

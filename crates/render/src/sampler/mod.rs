@@ -57,6 +57,22 @@ pub trait Sampler {
     fn next_1d(&mut self) -> f32;
     /// The next two uniform numbers in `[0, 1)^2`.
     fn next_2d(&mut self) -> Vec2;
+    /// The next uniform number, which the caller consumes as a *discrete* choice (strategy,
+    /// lobe, light, Russian roulette) or not at all (the lens of a pinhole camera, the time
+    /// of a static scene). The same number as [`Sampler::next_1d`]; a primary-sample-space
+    /// sampler tags it, so that Langevin steps keep it fixed and differentiate only the
+    /// continuous numbers (`pss::PssState::next_discrete`).
+    #[inline]
+    fn next_1d_discrete(&mut self) -> f32 {
+        self.next_1d()
+    }
+    /// The next two numbers as [`Sampler::next_2d`] (the same numbers: a stratified sampler
+    /// keeps its 2-D pattern), consumed as [`Sampler::next_1d_discrete`] (an unused direction
+    /// or lens sample).
+    #[inline]
+    fn next_2d_discrete(&mut self) -> Vec2 {
+        self.next_2d()
+    }
 }
 
 impl<S: Sampler + ?Sized> Sampler for &mut S {
@@ -71,6 +87,14 @@ impl<S: Sampler + ?Sized> Sampler for &mut S {
     #[inline]
     fn next_2d(&mut self) -> Vec2 {
         (**self).next_2d()
+    }
+    #[inline]
+    fn next_1d_discrete(&mut self) -> f32 {
+        (**self).next_1d_discrete()
+    }
+    #[inline]
+    fn next_2d_discrete(&mut self) -> Vec2 {
+        (**self).next_2d_discrete()
     }
 }
 

@@ -2,7 +2,7 @@
 //! weight (`bdpt::connect` restated over [`Real`], area lights only).
 
 use super::geometry::uniform_triangle;
-use super::path::{Ctx, Replay, Stop};
+use super::path::{Ctx, Replay, Stop, MAX_DIFF_VERTICES};
 use super::vertex::Vertex;
 use crate::autodiff::{Real, V3};
 use crate::bdpt::{MisHeuristic, VertexKind};
@@ -93,7 +93,26 @@ impl Ctx<'_> {
         if l.is_zero() || !l.is_finite() {
             return Err(Stop::Zero);
         }
-        let w = self.mis_weight(light, camera, sampled.as_ref(), s, t, heuristic)?;
+        let w = if self.constant_mis {
+            // The weight from the values alone: the same function, without the lanes.
+            let (n_light, n_camera) = (light.len(), camera.len());
+            let lv: [Vertex<f64>; MAX_DIFF_VERTICES] =
+                std::array::from_fn(|i| light.get(i).unwrap_or(&camera[0]).values());
+            let cv: [Vertex<f64>; MAX_DIFF_VERTICES] =
+                std::array::from_fn(|i| camera.get(i).unwrap_or(&camera[0]).values());
+            let sv = sampled.as_ref().map(Vertex::values);
+            let w = self.mis_weight(
+                &lv[..n_light.min(MAX_DIFF_VERTICES)],
+                &cv[..n_camera.min(MAX_DIFF_VERTICES)],
+                sv.as_ref(),
+                s,
+                t,
+                heuristic,
+            )?;
+            T::cst(w)
+        } else {
+            self.mis_weight(light, camera, sampled.as_ref(), s, t, heuristic)?
+        };
         Ok(l * w)
     }
 

@@ -136,16 +136,27 @@ impl<'s> DiffScene<'s> {
             ctx: path::Ctx {
                 scene,
                 camera: geometry::Camera::new(scene.camera().params()),
+                constant_mis: false,
             },
         })
+    }
+
+    /// The same scene with the MIS weight of a strategy computed from the vertices' values
+    /// and entering as a constant (`on`), or differentiated like everything else: the
+    /// gradient then covers the contribution only, at a fraction of the cost (the MIS
+    /// weight's densities are most of the replay's arithmetic).
+    #[must_use]
+    pub fn with_constant_mis(mut self, on: bool) -> Self {
+        self.ctx.constant_mis = on;
+        self
     }
 
     /// Evaluates the multiplexed-MLT strategy of `depth` selected by the primary samples
     /// `values` (interleaved over `streams` streams as `pss::PssState::raw_values`: stream
     /// `s`'s `k`-th number at `s + streams k`) for an image of `image_size` pixels. Number `k`
     /// of stream `s` becomes `make(value, lanes[s] + k)`: `|v, _| v` for `f64`,
-    /// [`Dual::variable`] for the gradient with respect to the numbers in
-    /// `pss::langevin::PssCoordinates` order (`lanes` = the prefix sums of the read counts).
+    /// [`Dual::variable`] for the gradient with respect to the numbers in read order
+    /// (`lanes` = the prefix sums of the read counts).
     #[allow(clippy::too_many_arguments)]
     pub fn evaluate<T: Real>(
         &self,
@@ -157,6 +168,30 @@ impl<'s> DiffScene<'s> {
         lanes: [usize; 3],
         make: fn(f64, usize) -> T,
     ) -> Evaluation<T> {
+        self.evaluate_continuous(
+            depth, image_size, heuristic, values, streams, lanes, [0; 3], make,
+        )
+    }
+
+    /// [`DiffScene::evaluate`] with lanes for the *continuous* numbers only: bit `k` of
+    /// `discrete[s]` marks number `k` of stream `s` as discrete (`pss::PssState::discrete_mask`);
+    /// it becomes the constant `T::cst(value)` and takes no lane, and the continuous numbers
+    /// of stream `s` take lanes `lanes[s], lanes[s] + 1, ...` in read order
+    /// (`pss::langevin::PssCoordinates` order when `lanes` are the prefix sums of the
+    /// continuous read counts). The forward-mode gradient then carries only the coordinates a
+    /// Langevin step moves.
+    #[allow(clippy::too_many_arguments)]
+    pub fn evaluate_continuous<T: Real>(
+        &self,
+        depth: u32,
+        image_size: Vec2,
+        heuristic: MisHeuristic,
+        values: &[f64],
+        streams: usize,
+        lanes: [usize; 3],
+        discrete: [u64; 3],
+        make: fn(f64, usize) -> T,
+    ) -> Evaluation<T> {
         if streams == 0 {
             return Evaluation::Unsupported;
         }
@@ -164,6 +199,7 @@ impl<'s> DiffScene<'s> {
             values,
             streams,
             lanes,
+            discrete,
             make,
             stream: 0,
             cursor: [0; 3],

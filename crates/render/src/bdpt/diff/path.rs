@@ -19,11 +19,13 @@ use crate::scene::Scene;
 
 /// Replays the primary samples of one state: stream `s`'s `k`-th number is
 /// `values[s + streams k]` (the interleaved layout of `pss::PssState`), made a variable of
-/// lane `lanes[s] + k`.
+/// lane `lanes[s] + j` if it is the `j`-th continuous number of its stream, a constant if bit
+/// `k` of `discrete[s]` marks it discrete.
 pub(super) struct Replay<'a, T> {
     pub(super) values: &'a [f64],
     pub(super) streams: usize,
     pub(super) lanes: [usize; 3],
+    pub(super) discrete: [u64; 3],
     pub(super) make: fn(f64, usize) -> T,
     pub(super) stream: usize,
     pub(super) cursor: [usize; 3],
@@ -42,8 +44,15 @@ impl<T: Real> Replay<'_, T> {
         let s = self.stream;
         let k = self.cursor[s];
         self.cursor[s] += 1;
+        let tags = self.discrete[s];
         match self.values.get(s + self.streams * k) {
-            Some(&v) => (self.make)(v, self.lanes[s] + k),
+            Some(&v) if k < 64 && tags & (1u64 << k) != 0 => T::cst(v),
+            Some(&v) => {
+                // Continuous numbers before this one in its stream.
+                let below = if k < 64 { (1u64 << k) - 1 } else { u64::MAX };
+                let j = k - (tags & below).count_ones() as usize;
+                (self.make)(v, self.lanes[s] + j)
+            }
             None => {
                 self.overrun = true;
                 T::cst(0.5)
@@ -78,6 +87,9 @@ pub(super) enum Stop {
 pub(super) struct Ctx<'s> {
     pub(super) scene: &'s Scene,
     pub(super) camera: Camera,
+    /// The MIS weight is computed from the vertices' values and enters as a constant (its
+    /// derivatives are not carried).
+    pub(super) constant_mis: bool,
 }
 
 impl Ctx<'_> {

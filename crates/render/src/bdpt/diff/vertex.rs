@@ -31,7 +31,40 @@ pub(super) struct Vertex<T> {
     pub(super) time: T,
 }
 
+/// `v` without its derivatives.
+fn values3<T: Real>(v: V3<T>) -> V3<f64> {
+    V3::new(v.x.value(), v.y.value(), v.z.value())
+}
+
 impl<T: Real> Vertex<T> {
+    /// The vertex's values without their derivatives (for quantities the gradient treats as
+    /// constants, such as the MIS weight).
+    pub(super) fn values(&self) -> Vertex<f64> {
+        Vertex {
+            kind: self.kind,
+            p: values3(self.p),
+            p_error: self.p_error,
+            ng: values3(self.ng),
+            frame: super::geometry::Frame {
+                s: values3(self.frame.s),
+                t: values3(self.frame.t),
+                n: values3(self.frame.n),
+            },
+            wo: values3(self.wo),
+            bsdf: self.bsdf.map(|b| bsdf::Surface {
+                bsdf: b.bsdf,
+                base: b.base.map(values3),
+            }),
+            light: self.light,
+            bary: (self.bary.0.value(), self.bary.1.value()),
+            beta: values3(self.beta),
+            pdf_fwd: self.pdf_fwd.value(),
+            pdf_rev: self.pdf_rev.value(),
+            delta: self.delta,
+            time: self.time.value(),
+        }
+    }
+
     pub(super) fn camera(p: V3<T>, forward: V3<T>, beta: V3<T>, time: T) -> Self {
         let zero = T::cst(0.0);
         Self {

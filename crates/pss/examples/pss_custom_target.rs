@@ -17,8 +17,8 @@
 //!   `mcmc_core::DifferentiableTarget` (Luan et al. 2020), its gradient caches shared by
 //!   `mcmc_core::langevin::CacheSharing` (fixed large-step probability).
 //!
-//! `cargo run --release --example custom_target` writes `custom_target.ppm` (PSSMLT) and prints
-//! each method's error against the exact image.
+//! `cargo run --release -p pss --example pss_custom_target` writes `custom_target.ppm` (PSSMLT)
+//! and prints each method's error against the exact image.
 
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;

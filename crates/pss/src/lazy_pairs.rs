@@ -1,0 +1,356 @@
+//! The orbital delayed-rejection stages at the cost of what a path reads: the pairwise polar
+//! Kelemen first stage and the orbital second stage (DR paper section 4.4, Alg. 2) applied
+//! lazily, pair by pair, to the coordinates the target reads, with the unread pairs caught up
+//! exactly when first read.
+//!
+//! # The chain they define
+//!
+//! Both stages act on *every* pair `(2k, 2k + 1)` of every stream (an unbounded layout, no
+//! lone coordinates): stage 1 moves each pair by an independent polar Kelemen step `d`, the
+//! orbital stage puts each pair of `z` at `y + R(theta) (x - y) = x + d - R(theta) d`. The
+//! closed-form acceptance of eq. 11 needs `Q1(y | z) = Q1(y | x)` and a symmetric `Q2`, which
+//! hold pair by pair on this unbounded layout exactly as on a fixed one; no layout depends on
+//! the state, so nothing is asymmetric. What is lazy is only *when* a pair is computed.
+//!
+//! # Why lazy equals eager
+//!
+//! [`crate::PssState`]'s argument (deferred decisions) with two kinds of missed steps. A pair
+//! that no evaluation read since it was stored influenced no decision; given the chain's
+//! history it is the stored pair moved by the `m1` accepted first-stage steps and the `m2`
+//! accepted second-stage steps since (a fresh uniform pair after a large step): `m1` polar
+//! Kelemen steps `d` and `m2` composite steps `d - R(theta) d`, all independent. Both are
+//! translations on the torus, so their order does not matter, and the state counts them per
+//! stream ([`crate::PssState`] keeps a second stamp for the accepted orbital steps). A
+//! candidate draws the parent's pair from that law when it first reads it, logs it, and the
+//! parent absorbs it on rejection, as for the per-coordinate lazy step. The two coordinates
+//! of a pair are always computed and stored together, so they share their stamps.
+//!
+//! One more rule makes the second stage exact: a pair the rejected `y` read is *observed*
+//! (its `d` entered `pi(y)` and the first decision), so its move in `z` is not a fresh
+//! composite step but `y`'s own `d` rotated. [`LazyOrbital`] therefore computes `z` at every
+//! pair `y` read when it proposes `z` (the cost of what `y` read), and lazily elsewhere.
+//!
+//! Random numbers: one key per candidate from the chain's RNG; the pair of stream `s`
+//! starting at interleaved index `a` draws its radius, direction and rotation uniforms from
+//! `(key, a, 0..3)` ([`crate::noise`]), so `z` recomputes `y`'s `d` from `y`'s key.
+
+use mcmc_core::delayed_rejection::{Group, OrbitalWalk, WrappedCauchy};
+use mcmc_core::proposal::ConditionalProposal;
+use mcmc_core::{Proposal, Proposed};
+use rand::{Rng, RngExt};
+
+use crate::noise::uniform;
+use crate::pairwise::{torus_displacement, PairwiseKelemenParams};
+use crate::state::{Pending, PssState};
+
+/// The laws of the lazy pairwise stages: the first stage's polar Kelemen radii and the
+/// orbital stage's wrapped Cauchy angle (DR paper eq. 9-10), and the streams whose first
+/// number no small step moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LazyPairParams {
+    /// Radius bounds of the first stage.
+    pub step: PairwiseKelemenParams,
+    /// Angle law of the orbital stage.
+    pub angle: WrappedCauchy,
+    /// Streams (bit s = stream s) whose number 0 is kept by both stages (renewed by large
+    /// steps only; MMLT's strategy choice, the DR paper's fixed strategy): their pairs are
+    /// `(1, 2), (3, 4), ...`. Exact: a fixed partition into pairs and kept coordinates (a
+    /// kept coordinate is its own reverse move in both stages). Default 0.
+    pub fixed_first: u8,
+}
+
+impl LazyPairParams {
+    /// The interleaved indices of the pair holding coordinate `index` of a state with
+    /// `streams` streams, or `None` for a kept first number ([`LazyPairParams::fixed_first`]).
+    #[inline]
+    #[must_use]
+    pub fn pair_of(&self, index: usize, streams: usize) -> Option<[usize; 2]> {
+        let stream = index % streams;
+        let offset = usize::from(self.fixed_first & (1 << stream) != 0);
+        let k = index / streams;
+        if k < offset {
+            return None;
+        }
+        let first = ((k - offset) & !1) + offset;
+        let a = stream + streams * first;
+        Some([a, a + streams])
+    }
+}
+
+impl LazyPairParams {
+    /// The authors' values: radii `[1.9/1024, 1.9/64]`
+    /// ([`PairwiseKelemenParams::drmlt2020`]), `rho = exp(-1/4)` (section 5.1.1).
+    #[must_use]
+    pub fn rioux_lavoie2020() -> Self {
+        Self {
+            step: PairwiseKelemenParams::drmlt2020(),
+            angle: WrappedCauchy::rioux_lavoie2020(),
+            fixed_first: 0,
+        }
+    }
+
+    /// The same laws keeping the first number of the streams of `streams`.
+    #[must_use]
+    pub const fn with_fixed_first(mut self, streams: u8) -> Self {
+        self.fixed_first = streams;
+        self
+    }
+
+    /// The first-stage displacement of the pair at `a` drawn from `key`: `r (cos phi,
+    /// sin phi)`, `r` log-uniform (eq. 9, from draw `draw`), the direction uniform on the
+    /// circle ([`uniform_direction`], from draw `draw + 1`).
+    #[inline]
+    #[must_use]
+    pub fn step_displacement(&self, key: u64, a: u64, draw: u64) -> [f64; 2] {
+        let r = self.step.radius(uniform(key, a, draw));
+        let [cos, sin] = uniform_direction(key, a, draw + 1);
+        [r * cos, r * sin]
+    }
+
+    /// The move `d - R(theta) d` of a pair on its orbit (eq. 10), `theta` from `u`.
+    #[inline]
+    #[must_use]
+    pub fn orbit_displacement(&self, d: [f64; 2], u: f64) -> [f64; 2] {
+        let (cos, sin) = self.angle.rotation(u);
+        [
+            d[0] - (cos * d[0] - sin * d[1]),
+            d[1] - (sin * d[0] + cos * d[1]),
+        ]
+    }
+
+    /// The sum of `first` first-stage steps and `second` composite steps drawn from `key`
+    /// for the pair at `a` (the catch-up of missed accepted steps: translations commute).
+    #[must_use]
+    pub fn missed_steps(&self, key: u64, a: u64, first: u64, second: u64) -> [f64; 2] {
+        let mut total = [0.0, 0.0];
+        for j in 0..first + second {
+            let d = self.step_displacement(key, a, 3 * j);
+            let d = if j < first {
+                d
+            } else {
+                self.orbit_displacement(d, uniform(key, a, 3 * j + 2))
+            };
+            total[0] += d[0];
+            total[1] += d[1];
+        }
+        total
+    }
+}
+
+/// Salt of the direction draws (see [`uniform_direction`]).
+const DIRECTION_SALT: u64 = 0x6469_7265_6374_696f;
+
+/// Tries of the direction's rejection sampler before its fallback.
+const DIRECTION_TRIES: u64 = 32;
+
+/// A direction uniform on the unit circle for the pair at `a`, draw `draw` of `key`: the
+/// first point of the square `[-1, 1)^2` inside the unit disc (and off a tiny disc around 0),
+/// normalised, from the counter-based uniforms of a key derived from `key` (points `2t`,
+/// `2t + 1` of the sub-stream `draw`); about 1.27 points on average and no trigonometry.
+/// Exactly uniform: the accepted point is uniform on the annulus, whose direction is
+/// uniform; after 32 rejected points (probability below `1e-21`) the angle
+/// `2 pi u` of a further uniform, uniform too.
+#[inline]
+#[must_use]
+pub fn uniform_direction(key: u64, a: u64, draw: u64) -> [f64; 2] {
+    let key = mcmc_core::seed::mix64(key ^ DIRECTION_SALT);
+    let base = draw.wrapping_mul(2 * DIRECTION_TRIES + 1);
+    // The first point, inline (accepted with probability pi / 4); the rest out of line, so
+    // that the common case computes two uniforms only.
+    direction_try(key, a, base).unwrap_or_else(|| direction_retry(key, a, base))
+}
+
+/// Point `t` of [`uniform_direction`]'s rejection sampler at draw `base + 2 t`, normalised if
+/// it lies in the disc.
+#[inline]
+fn direction_try(key: u64, a: u64, draw: u64) -> Option<[f64; 2]> {
+    let x = 2.0 * uniform(key, a, draw) - 1.0;
+    let y = 2.0 * uniform(key, a, draw + 1) - 1.0;
+    let q = x * x + y * y;
+    (q <= 1.0 && q > 1e-12).then(|| {
+        let inv = 1.0 / q.sqrt();
+        [x * inv, y * inv]
+    })
+}
+
+/// The points after the first of [`uniform_direction`], then its fallback.
+#[cold]
+#[inline(never)]
+fn direction_retry(key: u64, a: u64, base: u64) -> [f64; 2] {
+    for t in 1..DIRECTION_TRIES {
+        if let Some(d) = direction_try(key, a, base + 2 * t) {
+            return d;
+        }
+    }
+    let (sin, cos) =
+        (std::f64::consts::TAU * uniform(key, a, base + 2 * DIRECTION_TRIES)).sin_cos();
+    [cos, sin]
+}
+
+impl Default for LazyPairParams {
+    fn default() -> Self {
+        Self::rioux_lavoie2020()
+    }
+}
+
+/// The lazy pairwise polar Kelemen first stage: the candidate is a copy of `x` with the
+/// pending [`Pending::Pairs`]; each pair the target reads is caught up and moved then (see
+/// the [module docs](self)). Symmetric.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LazyPairwise {
+    /// Radius and angle laws.
+    pub params: LazyPairParams,
+}
+
+/// The pairs of `streams` streams whose coordinates are below `len`, as groups.
+fn stored_pairs(params: LazyPairParams, streams: usize, len: usize) -> impl Iterator<Item = Group> {
+    (0..len).filter_map(move |i| match params.pair_of(i, streams) {
+        Some([a, b]) if a == i && b < len => Some(Group::Pair(a, b)),
+        _ => None,
+    })
+}
+
+impl Proposal<PssState> for LazyPairwise {
+    fn propose<R: Rng + ?Sized>(&self, x: &PssState, y: &mut PssState, rng: &mut R) -> Proposed {
+        y.clone_from(x);
+        y.set_pending(Pending::Pairs(self.params), rng.random());
+        Proposed::symmetric()
+    }
+
+    /// The density of the pairs stored in both states (exact for states materialised to the
+    /// same length; the kernel's orbital rule never needs it).
+    fn log_q(&self, from: &PssState, to: &PssState) -> f64 {
+        if from.streams() != to.streams() {
+            return f64::NEG_INFINITY;
+        }
+        let stage = self.params.step.stage();
+        let read = |s: &PssState, i: usize| s.raw_values()[i];
+        let log_q = stage.groups_log_q(
+            stored_pairs(self.params, from.streams(), from.len().min(to.len())),
+            |i| read(from, i),
+            |i| read(to, i),
+        );
+        if log_q.is_nan() {
+            f64::NEG_INFINITY
+        } else {
+            log_q
+        }
+    }
+
+    fn is_symmetric(&self) -> bool {
+        true
+    }
+}
+
+/// The lazy orbital second stage on the streams of `stream_mask`: `z` is a copy of `x` with
+/// the pending [`Pending::Orbit`] of `y`'s key, computed at once on the pairs `y` read and
+/// lazily elsewhere (see the [module docs](self)); other streams keep `x`'s values.
+/// [`Proposed::Invalid`] unless `y` is a [`LazyPairwise`] candidate of `x`. Symmetric.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LazyOrbital {
+    /// Radius and angle laws (the first stage's radii: `z` recomputes `y`'s moves).
+    pub params: LazyPairParams,
+    /// Streams moved (bit s = stream s).
+    pub stream_mask: u8,
+}
+
+impl LazyOrbital {
+    /// The stage on the streams of `stream_mask`.
+    #[must_use]
+    pub fn new(params: LazyPairParams, stream_mask: u8) -> Self {
+        Self {
+            params,
+            stream_mask,
+        }
+    }
+}
+
+impl ConditionalProposal<PssState> for LazyOrbital {
+    fn propose<R: Rng + ?Sized>(
+        &self,
+        x: &PssState,
+        y: &PssState,
+        z: &mut PssState,
+        rng: &mut R,
+    ) -> Proposed {
+        z.clone_from(x);
+        let pending = Pending::Orbit {
+            params: self.params,
+            first_key: y.key(),
+            stream_mask: self.stream_mask,
+        };
+        z.set_pending(pending, rng.random());
+        if !matches!(y.pending(), Pending::Pairs(p) if p == self.params)
+            || y.parent_key() != x.key()
+            || y.streams() != x.streams()
+        {
+            return Proposed::Invalid { component: 0 };
+        }
+        z.materialize_read_by(y, self.stream_mask);
+        Proposed::symmetric()
+    }
+
+    /// The orbital density ([`OrbitalWalk::groups_log_q`]) of the moved pairs stored in all
+    /// three states (exact for states materialised to the same length).
+    fn log_q(&self, x: &PssState, y: &PssState, z: &PssState) -> f64 {
+        if y.streams() != x.streams() || z.streams() != x.streams() {
+            return f64::NEG_INFINITY;
+        }
+        let streams = x.streams();
+        let mask = self.stream_mask;
+        let groups = stored_pairs(self.params, streams, x.len().min(y.len()).min(z.len())).filter(
+            move |g| match *g {
+                Group::Pair(a, _) | Group::Single(a) => mask & (1 << (a % streams)) != 0,
+            },
+        );
+        let read = |s: &PssState, i: usize| s.raw_values()[i];
+        let log_q = OrbitalWalk::torus_with(self.params.angle).groups_log_q(
+            groups,
+            |i| read(x, i),
+            |i| read(y, i),
+            |i| read(z, i),
+        );
+        // Unmoved streams must keep x's values.
+        let kept = (0..x.len().min(z.len()))
+            .filter(|&i| mask & (1 << (i % streams)) == 0)
+            .all(|i| torus_displacement(read(x, i), read(z, i)) == 0.0);
+        if log_q.is_nan() || !kept {
+            f64::NEG_INFINITY
+        } else {
+            log_q
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn directions_are_unit_and_uniform_in_angle() {
+        let n = 200_000;
+        let mut bins = [0u32; 20];
+        for i in 0..n {
+            let [c, s] = uniform_direction(i, 3, 1);
+            assert!((c * c + s * s - 1.0).abs() < 1e-12);
+            let t = (s.atan2(c) + PI) / (2.0 * PI);
+            bins[((t * 20.0) as usize).min(19)] += 1;
+        }
+        // Each bin has mean 10 000 and sd ~98: 6 sd bound.
+        for b in bins {
+            assert!((i64::from(b) - 10_000).abs() < 600, "{bins:?}");
+        }
+    }
+
+    #[test]
+    fn kept_first_numbers_shift_the_pairs() {
+        let p = LazyPairParams::default();
+        assert_eq!(p.pair_of(5, 3), Some([2, 5]));
+        let kept = p.with_fixed_first(0b100);
+        assert_eq!(kept.pair_of(2, 3), None);
+        assert_eq!(kept.pair_of(5, 3), Some([5, 8]));
+        assert_eq!(kept.pair_of(8, 3), Some([5, 8]));
+        assert_eq!(kept.pair_of(4, 3), Some([1, 4]));
+    }
+}

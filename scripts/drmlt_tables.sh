@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# The tables docs/methods/drmlt.md requires, every method on one footing (examples/drmlt.rs
+# --footing: the same direct pass, 16 spp over depths 0-1; the same normalisation per scene,
+# the mean luminance of scenes/references/SCENE.exr; large steps 0.3 without MIS; max depth 5):
+# DR orbital, Tierney-Mira and Green-Mira over PSSMLT (BDPT), PSSMLT over the path tracer and
+# MMLT against PSSMLT/K, PSSMLT/G (sigma matched to DR orbital's acceptance; both bases) and
+# MMLT/K. Equal time (128x128, SECONDS per render, SEEDS seeds), then equal mutations (MPP
+# mutations per pixel). One thread per render; each (scene, seed) run of every method is one
+# `--run-one` job, taken under `flock /work/measure.lock` when that file exists, so other
+# measurements interleave; methods run in a fixed order within a seed.
+#
+# Usage: [SCENES="a b"] [OUT=dir] scripts/drmlt_tables.sh [SECONDS] [SEEDS] [MPP]
+#   defaults: 30 s, 5 seeds, 64 mutations per pixel; scenes cornell-glass glossy-highlight
+#   caustic-pool; OUT target/drmlt-footing.
+# Duration: 14 methods x SECONDS x SEEDS x scenes for equal time (30 s, 5 seeds, 3 scenes:
+# 105 min), plus the PSSMLT/G calibration, which every process repeats (about 1 min per
+# scene at 128x128: the job list, each run and the collect step), plus the equal-mutation
+# runs (at 64 mpp about 15 min): about 2.5 h of one core in all. The thin glossy highlight
+# scene where PSSMLT/G beats PSSMLT/K is not bundled yet: add it to SCENES when it is.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+secs="${1:-30}"
+seeds="${2:-5}"
+mpp="${3:-64}"
+out="${OUT:-target/drmlt-footing}"
+scenes="${SCENES:-cornell-glass glossy-highlight caustic-pool}"
+cargo build --release --quiet --example drmlt
+mkdir -p "$out"
+# A private copy: a concurrent `cargo build` must not replace the binary mid-measurement.
+bin="$out/drmlt"
+cp target/release/examples/drmlt "$bin"
+lock() {
+    if [ -e /work/measure.lock ]; then flock /work/measure.lock "$@"; else "$@"; fi
+}
+for regime in "--time $secs" "--spp $mpp"; do
+    name=$(echo "$regime" | tr -d ' -')
+    jobs="$out/$name"
+    common=(--footing --no-toy $regime --seeds "$seeds" --size 128 --threads 1 --out "$jobs")
+    # shellcheck disable=SC2086
+    "$bin" "${common[@]}" --emit-jobs "$jobs/jobs" $scenes
+    for id in $(grep -o '"id":"[^"]*"' "$jobs/jobs/jobs.jsonl" | cut -d'"' -f4); do
+        # shellcheck disable=SC2086
+        lock "$bin" "${common[@]}" --run-one "$id" $scenes
+    done
+    # shellcheck disable=SC2086
+    "$bin" "${common[@]}" --collect $scenes
+    echo "wrote $jobs/results.md"
+done
