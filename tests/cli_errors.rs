@@ -35,6 +35,24 @@ fn bad_flags_are_rejected_with_the_flag_named() {
         ],
     );
     assert_fails_with(
+        &["render", "--integrator", "pathmlt", "--sigma", "4"],
+        &[
+            "--sigma",
+            "expected paper, tuned or radians in (0, pi]",
+            "4",
+        ],
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--integrator",
+            "pathmlt",
+            "--target-acceptance",
+            "1.5",
+        ],
+        &["target-acceptance", "(0, 1)"],
+    );
+    assert_fails_with(
         &[
             "render",
             "--integrator",

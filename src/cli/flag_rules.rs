@@ -194,6 +194,16 @@ pub(crate) const RULES: &[FlagRule] = &[
         also: "",
     },
     FlagRule {
+        id: "sigma",
+        applies: |m| m.kind() == K::PathMlt,
+        also: "",
+    },
+    FlagRule {
+        id: "target_acceptance",
+        applies: |m| m.kind() == K::PathMlt,
+        also: "",
+    },
+    FlagRule {
         id: "mala_preset",
         applies: |m| matches!(m, M::Mala(_)) || drmlt_langevin(m),
         also: "drmlt with --dr-variant cheap-then-expensive",
@@ -283,6 +293,8 @@ mod tests {
         ("dr_fixed_strategy", None),
         ("perturbation", Some(["lens", "multichain"])),
         ("adapt", Some(["global", "grid"])),
+        ("sigma", Some(["paper", "0.1"])),
+        ("target_acceptance", Some(["0.8", "0.3"])),
         ("mala_preset", Some(["paper", "paper-values"])),
         ("mala_kernel", Some(["mala", "cheap-then-expensive"])),
         ("mala_max_depth", Some(["2", "4"])),
@@ -333,7 +345,7 @@ mod tests {
             "dr_variant" | "dr_on" => vec!["drmlt"],
             // Only with --dr-on mmlt (not drmlt's default sampler).
             "dr_fixed_strategy" => vec![],
-            "perturbation" | "adapt" => vec!["pathmlt"],
+            "perturbation" | "adapt" | "sigma" | "target_acceptance" => vec!["pathmlt"],
             "mala_preset" | "mala_max_depth" | "mala_gradient" | "mala_kernel" => MALA.to_vec(),
             "lqmc_preset" => vec!["lqmc"],
             other => panic!("no expectation for {other}"),

@@ -126,11 +126,20 @@ pub(crate) struct MethodFlags {
     #[arg(long, value_name = "lens|multichain", default_value = "lens", value_parser = parse::perturbation)]
     pub(crate) perturbation: pathspace::PerturbationKind,
     /// pathmlt: how the perturbation's angular scale is adapted (Otsu et al. 2018): `fixed`
-    /// (0.02 rad), `global` (one adapted scale), `grid` (per cell of a 20 x 20 screen grid;
+    /// (at --sigma), `global` (one adapted scale), `grid` (per cell of a 20 x 20 screen grid;
     /// multichain: x a 50 x 50 direction grid per cell) or `quadtree` (a refined screen
     /// quadtree; multichain: a direction quadtree per cell of the 20 x 20 screen grid).
     #[arg(long, value_name = "fixed|global|grid|quadtree", default_value = "fixed", value_parser = parse::adapt)]
     pub(crate) adapt: render::mlt::pathmlt::PathAdapt,
+    /// pathmlt: FIXED's angular scale and the adaptive variants' start: `paper` (lambda = 1,
+    /// sigma = e^0.5 = 1.6487 rad, Otsu et al. 2018 section 8.1), `tuned` (0.02 rad) or a
+    /// value in (0, pi] radians [default: tuned].
+    #[arg(long, value_name = "paper|tuned|RAD", value_parser = parse::pathmlt_sigma)]
+    pub(crate) sigma: Option<f64>,
+    /// pathmlt: the adaptive variants' target acceptance, in (0, 1) (the paper's 0.5; 0.8 for
+    /// its glossy Necklace scene).
+    #[arg(long, value_name = "ALPHA", default_value_t = 0.5)]
+    pub(crate) target_acceptance: f64,
     /// mala*: parameter preset, `paper` (Luan et al. 2020's text, section 7: epsilon 0.01 as
     /// the variance of eq. 7, K 30, H 10000), `paper-values` (those values with the authors'
     /// code's semantics: covariance epsilon^2 (M + 1), M in [0.01, 100], drift clamp 5, radius
@@ -276,6 +285,8 @@ impl MethodFlags {
                 s.bootstrap_samples = self.bootstrap_samples as usize;
                 s.perturbation = self.perturbation;
                 s.adapt = self.adapt;
+                s.sigma = self.sigma.unwrap_or(s.sigma);
+                s.target_acceptance = self.target_acceptance;
                 s.normalization = self.normalization.unwrap_or(s.normalization);
             }
             MethodSettings::Lqmc(s) => *s = self.lqmc_preset.unwrap_or(*s),

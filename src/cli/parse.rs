@@ -347,6 +347,22 @@ pub(crate) fn perturbation(text: &str) -> Result<pathspace::PerturbationKind, St
     }
 }
 
+/// Parses pathmlt's `--sigma`: `paper` (`lambda = 1`), `tuned` (0.02 rad) or radians in
+/// `(0, pi]`.
+pub(crate) fn pathmlt_sigma(text: &str) -> Result<f64, String> {
+    use render::mlt::pathmlt::{PATHMLT_PAPER_SIGMA, PATHMLT_SIGMA};
+    match text.trim().to_ascii_lowercase().as_str() {
+        "paper" => Ok(PATHMLT_PAPER_SIGMA),
+        "tuned" => Ok(PATHMLT_SIGMA),
+        other => match other.parse::<f64>() {
+            Ok(v) if v > 0.0 && v <= std::f64::consts::PI => Ok(v),
+            _ => Err(format!(
+                "expected paper, tuned or radians in (0, pi], got '{text}'"
+            )),
+        },
+    }
+}
+
 /// Parses `--adapt`.
 pub(crate) fn adapt(text: &str) -> Result<render::mlt::pathmlt::PathAdapt, String> {
     use render::mlt::pathmlt::PathAdapt;

@@ -49,8 +49,10 @@ pub trait LargeStepTunable {
 /// ([`crate::controller::RegionalScale`]) reads regions from, updates at synchronisation points
 /// and hands back to every chain.
 ///
-/// Writes are copy-on-write: a chain still holding the previous handle keeps the previous
-/// scales (e.g. an `Arc` and `Arc::make_mut`).
+/// The controller writes only at synchronisation points, when no chain is stepping, and hands
+/// the written handle to every chain before the next round. An implementation may copy on
+/// write (a chain still holding the previous handle keeps the previous scales, e.g. an `Arc`
+/// and `Arc::make_mut`) or write in place to scales all handles share (no copy per round).
 pub trait SharedRegionalScales: Clone {
     /// The partition the scales are over (a [`crate::Partition`] of the state space).
     type Partition;
@@ -60,7 +62,8 @@ pub trait SharedRegionalScales: Clone {
     fn num_regions(&self) -> usize;
     /// `lambda` of a region.
     fn log_scale_of(&self, region: usize) -> f64;
-    /// Sets `lambda` of a region (copying the scales first if another handle shares them).
+    /// Sets `lambda` of a region (in place, or copying the scales first if another handle
+    /// shares them).
     fn set_log_scale_of(&mut self, region: usize, lambda: f64);
     /// Splits a region, its children inheriting its scale (copying first if shared); returns
     /// the fresh ids of the children other than `region` itself (see
@@ -68,6 +71,17 @@ pub trait SharedRegionalScales: Clone {
     fn split_region(&mut self, region: usize) -> Option<std::ops::Range<usize>>;
     /// True if both handles share the same scales (handing them over again is a no-op).
     fn same_as(&self, other: &Self) -> bool;
+    /// Starts recording the region of the first state this handle is asked about (the
+    /// proposal's current state) until the next call; returns false if the handle does not
+    /// record it (the default). Lets a controller that needs only the perturbation steps'
+    /// regions skip its own lookup ([`crate::controller::RegionalScale`]).
+    fn clear_region_hint(&self) -> bool {
+        false
+    }
+    /// The region recorded since [`Self::clear_region_hint`], if any.
+    fn region_hint(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// A kernel or proposal whose scales come from a [`SharedRegionalScales`] handle: how a shared

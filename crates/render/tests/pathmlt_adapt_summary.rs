@@ -1,8 +1,8 @@
 //! Regional adaptation's typed results through the session (`--integrator pathmlt --adapt`):
 //! the learned sigma map and the `AdaptSummary` (whose note is the render's note), RA-QUADTREE's
-//! refinement schedule from `PathMltSettings::refine_for_mutations` / `split_after_visits`;
-//! negative controls: FIXED reports neither, a schedule beyond the budget never refines, and
-//! `M_split = 0` is refused.
+//! refinement schedule from the pixel count (`split_after_visits` overriding it); negative
+//! controls: FIXED reports neither, an `M_split` beyond the visits never splits, and
+//! `M_split = 0`, a scale outside `(0, pi]` or a target outside `(0, 1)` are refused.
 
 use std::sync::atomic::AtomicBool;
 
@@ -69,30 +69,47 @@ fn adaptive_runs_report_the_sigma_map_and_a_typed_summary() {
 }
 
 #[test]
-fn quadtree_refines_on_the_schedule_it_is_given() {
+fn quadtree_refines_on_the_pixel_schedule() {
     let quadtree = PathMltSettings::otsu2018(PerturbationKind::Lens, PathAdapt::Quadtree);
-    let refinements = |method| {
-        let out = run(method).unwrap();
-        out.mcmc.unwrap().regional_adapt.unwrap().refinements
-    };
-    // Scaled to the budget (12 288 mutations): M_refine = 1000, about a dozen passes.
-    let scaled = refinements(quadtree);
-    assert!(scaled >= 5, "{scaled}");
-    // The same schedule given explicitly gives the same render.
-    let explicit = PathMltSettings {
-        refine_for_mutations: Some(64 * 16 * 12),
+    let summary = |method| run(method).unwrap().mcmc.unwrap().regional_adapt.unwrap();
+    // 16 x 12 = 192 pixels: M_split = 500, M_refine = 500 * 12 = 6000, at most 12 leaves;
+    // 12 288 mutations reach two passes.
+    let s = summary(quadtree);
+    assert_eq!(s.refinements, 2);
+    assert!(s.splits >= 1 && s.regions <= 12, "{s:?}");
+    // Negative control: an M_split beyond any leaf's visits never splits.
+    let never_splits = PathMltSettings {
+        split_after_visits: Some(1_000_000),
         ..quadtree
     };
-    assert_eq!(refinements(explicit), scaled);
-    // Negative control: scaled to 10^9 mutations, M_refine is beyond the budget.
-    let late = PathMltSettings {
-        refine_for_mutations: Some(1_000_000_000),
-        ..quadtree
-    };
-    assert_eq!(refinements(late), 0);
+    let s = summary(never_splits);
+    assert_eq!((s.splits, s.regions), (0, 1));
     let never = PathMltSettings {
         split_after_visits: Some(0),
         ..quadtree
     };
     assert!(run(never).is_err());
+}
+
+#[test]
+fn scale_and_target_out_of_range_are_refused() {
+    let grid = PathMltSettings::otsu2018(PerturbationKind::Lens, PathAdapt::Grid);
+    for bad in [
+        PathMltSettings { sigma: 0.0, ..grid },
+        PathMltSettings { sigma: 4.0, ..grid },
+        PathMltSettings {
+            target_acceptance: 1.0,
+            ..grid
+        },
+        PathMltSettings {
+            round_mutations: 0,
+            ..grid
+        },
+    ] {
+        let err = run(bad).unwrap_err().to_string();
+        assert!(
+            err.contains("sigma") || err.contains("target-acceptance") || err.contains("round"),
+            "{err}"
+        );
+    }
 }

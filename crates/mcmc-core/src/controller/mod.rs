@@ -3,6 +3,7 @@
 
 mod global_scale;
 mod large_step;
+mod regional_params;
 mod regional_pool;
 mod regional_scale;
 mod shared;
@@ -12,8 +13,11 @@ pub use large_step::{
     automatic_large_step_probability, AutoLargeStep, LargeStepEstimate, LargeStepStats,
     FLATNESS_THRESHOLD, NOT_FLAT_LARGE_STEP_PROBABILITY,
 };
+pub use regional_params::{
+    RegionalScaleParams, RegionalUpdateRule, PIXELS_PER_LEAF, SPLIT_UPDATES,
+};
 pub use regional_pool::PooledRegionalScales;
-pub use regional_scale::{RegionStats, RegionalScale, RegionalScaleParams, MAX_VISITS_PER_ROUND};
+pub use regional_scale::{RegionStats, RegionalScale, MAX_VISITS_PER_ROUND, RECENT_WINDOW};
 pub use shared::{Both, SharedController};
 
 /// The tunable interfaces, re-exported from [`crate::tunable`] where they live.

@@ -1,8 +1,8 @@
 //! The statistics of regional scale adaptation pooled over all chains, and the work done on
 //! them at a synchronisation point: the `lambda_k` updates of Alg. 1 and refinement.
 
-use super::regional_scale::{RegionStats, RegionalScaleParams};
-use super::AdaptState;
+use super::regional_params::{RegionalScaleParams, RegionalUpdateRule};
+use super::regional_scale::RegionStats;
 use crate::tunable::SharedRegionalScales;
 
 /// One visit of a chain's state to a region, recorded between synchronisation points.
@@ -108,13 +108,7 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
 
     /// Starts pooling from the scales of the first chain (all chains must share them).
     pub(super) fn init(&mut self, sigmas: &Sc, params: RegionalScaleParams) {
-        self.regions = vec![
-            RegionStats {
-                adapt: AdaptState::new(),
-                visits_since_refine: 0,
-            };
-            sigmas.num_regions()
-        ];
+        self.regions = vec![RegionStats::new(); sigmas.num_regions()];
         self.sigmas = Some(sigmas.clone());
         self.params = Some(params);
         self.next_refine = params.refine_every;
@@ -122,12 +116,22 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         self.frozen = params.freeze_after_mutations == Some(0);
     }
 
-    /// Adds one chain's visits of the round, in order (Alg. 1 lines 11-12).
+    /// Adds one chain's visits of the round, in order (Alg. 1 lines 11-18).
+    ///
+    /// With [`RegionalUpdateRule::EveryLVisits`] every `L`-th proposal from a region makes
+    /// its sign step here, with the `lambda` left by the previous step: the pooled records,
+    /// fed chain after chain in job order, go through exactly the sequential rule
+    /// ([`super::AdaptState::record`]). With [`RegionalUpdateRule::OncePerRound`] the region
+    /// is only marked due and steps once at [`Self::end_round`].
     pub(super) fn apply(&mut self, visits: &[Visit], steps: u64) {
         self.mutations += steps;
-        if self.sigmas.is_none() || self.frozen {
+        let (Some(sigmas), Some(params)) = (self.sigmas.as_mut(), self.params.as_ref()) else {
+            return;
+        };
+        if self.frozen {
             return;
         }
+        let every_l = params.update_rule == RegionalUpdateRule::EveryLVisits;
         for v in visits {
             let k = v.region as usize;
             let Some(state) = self.regions.get_mut(k) else {
@@ -135,7 +139,18 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
                 continue;
             };
             state.visits_since_refine += 1;
-            if v.perturbed {
+            if !v.perturbed {
+                continue;
+            }
+            state.note_proposal(v.accept);
+            if every_l {
+                let lambda = sigmas.log_scale_of(k);
+                if let Some(new) = state.adapt.record(v.accept, lambda, &params.adapt) {
+                    if new != lambda {
+                        sigmas.set_log_scale_of(k, new);
+                    }
+                }
+            } else {
                 state.adapt.visits += 1;
                 state.adapt.accepted += v.accept;
                 if state.adapt.visits == self.updates_every {
@@ -145,9 +160,9 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         }
     }
 
-    /// Alg. 1 lines 13-18 at the synchronisation point, once per region that has at least `L`
-    /// visits: `lambda_k += gamma_{n_k} sgn(A_k / i_k - alpha*)` (eq. 5, 6), clamped to
-    /// `lambda_min`; `i_k = A_k = 0`, `n_k += 1`.
+    /// [`RegionalUpdateRule::OncePerRound`]: Alg. 1 lines 13-18 at the synchronisation point,
+    /// once per region that has at least `L` visits: `lambda_k += gamma_{n_k} sgn(A_k / i_k -
+    /// alpha*)` (eq. 5, 6), clamped to `lambda_min`; `i_k = A_k = 0`, `n_k += 1`.
     fn update_scales(&mut self) {
         let (Some(sigmas), Some(params)) = (self.sigmas.as_mut(), self.params) else {
             return;
@@ -207,19 +222,18 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         }
         let before = self.regions.len();
         // Only the regions that existed before the pass are candidates (section 6.2).
+        let cap = params.max_regions.unwrap_or(usize::MAX);
         for k in 0..before {
             let parent = self.regions[k];
-            if parent.visits_since_refine < threshold || sigmas.split_region(k).is_none() {
+            if parent.visits_since_refine < threshold
+                || sigmas.num_regions().saturating_add(3) > cap
+                || sigmas.split_region(k).is_none()
+            {
                 continue;
             }
-            let child = RegionStats {
-                adapt: AdaptState {
-                    visits: 0,
-                    accepted: 0.0,
-                    updates: (parent.adapt.updates / 4).max(1),
-                },
-                visits_since_refine: 0,
-            };
+            let mut child = RegionStats::new();
+            child.adapt.updates = (parent.adapt.updates / 4).max(1);
+            child.recent_acceptance = parent.recent_acceptance;
             self.regions[k] = child;
             self.regions.resize(sigmas.num_regions(), child);
             self.splits += 1;
@@ -231,5 +245,139 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         while self.next_refine <= self.mutations {
             self.next_refine += params.refine_every;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::controller::{AdaptState, RegionalScaleParams, RegionalUpdateRule};
+    use rand::{RngExt, SeedableRng};
+    use std::sync::Arc;
+
+    /// Per-region scales behind an `Arc`, copy-on-write.
+    #[derive(Clone, Debug)]
+    struct Scales(Arc<Vec<f64>>);
+
+    impl SharedRegionalScales for Scales {
+        type Partition = ();
+        fn partition(&self) -> &() {
+            &()
+        }
+        fn num_regions(&self) -> usize {
+            self.0.len()
+        }
+        fn log_scale_of(&self, region: usize) -> f64 {
+            self.0[region]
+        }
+        fn set_log_scale_of(&mut self, region: usize, lambda: f64) {
+            Arc::make_mut(&mut self.0)[region] = lambda;
+        }
+        fn split_region(&mut self, _region: usize) -> Option<std::ops::Range<usize>> {
+            None
+        }
+        fn same_as(&self, other: &Self) -> bool {
+            Arc::ptr_eq(&self.0, &other.0)
+        }
+    }
+
+    const REGIONS: usize = 5;
+
+    /// A recorded acceptance sequence: `rounds x chains` blocks of visits; region 0 is visited
+    /// far more often than the others (as GLOBAL's single region is), acceptance depends on
+    /// the region.
+    fn record(rounds: usize, chains: usize, per_chain: usize) -> Vec<Vec<Vec<Visit>>> {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        (0..rounds)
+            .map(|_| {
+                (0..chains)
+                    .map(|_| {
+                        (0..per_chain)
+                            .map(|_| {
+                                let u: f64 = rng.random();
+                                let region = if u < 0.6 { 0 } else { (u * 10.0) as u32 % 5 };
+                                Visit {
+                                    region,
+                                    perturbed: rng.random::<f64>() < 0.5,
+                                    accept: rng.random::<f64>().powf(1.0 + f64::from(region)),
+                                }
+                            })
+                            .collect()
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The pool's scales after feeding `rec` round by round, chain by chain.
+    fn pooled(rec: &[Vec<Vec<Visit>>], rule: RegionalUpdateRule) -> (Vec<f64>, Vec<u64>) {
+        let params = RegionalScaleParams {
+            split_after_visits: None,
+            update_rule: rule,
+            ..RegionalScaleParams::otsu2018()
+        };
+        let mut pool = PooledRegionalScales::default();
+        pool.init(&Scales(Arc::new(vec![1.0; REGIONS])), params);
+        for round in rec {
+            for chain in round {
+                pool.apply(chain, chain.len() as u64);
+            }
+            pool.end_round();
+        }
+        let s = pool.sigmas().unwrap();
+        (
+            (0..REGIONS).map(|k| s.log_scale_of(k)).collect(),
+            (0..REGIONS)
+                .map(|k| pool.region_stats(k).unwrap().adapt.updates)
+                .collect(),
+        )
+    }
+
+    /// Alg. 1 run sequentially over the concatenated record: one `AdaptState` and one
+    /// `lambda` per region, a step every `L` proposals from the region.
+    fn sequential(rec: &[Vec<Vec<Visit>>]) -> (Vec<f64>, Vec<u64>) {
+        let p = RegionalScaleParams::otsu2018().adapt;
+        let mut lambda = vec![1.0; REGIONS];
+        let mut state = [AdaptState::new(); REGIONS];
+        for v in rec.iter().flatten().flatten().filter(|v| v.perturbed) {
+            let k = v.region as usize;
+            if let Some(new) = state[k].record(v.accept, lambda[k], &p) {
+                lambda[k] = new;
+            }
+        }
+        (lambda, state.iter().map(|s| s.updates).collect())
+    }
+
+    #[test]
+    fn pooled_steps_equal_the_sequential_rule_on_the_same_record() {
+        let rec = record(30, 8, 25);
+        let (seq_lambda, seq_n) = sequential(&rec);
+        let (lambda, n) = pooled(&rec, RegionalUpdateRule::EveryLVisits);
+        assert_eq!(n, seq_n);
+        for (a, b) in lambda.iter().zip(&seq_lambda) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{lambda:?} vs {seq_lambda:?}");
+        }
+        // The same concatenated record cut into other rounds and chains: the same scales
+        // (what makes them independent of the thread count).
+        let flat: Vec<Visit> = rec.iter().flatten().flatten().copied().collect();
+        let recut: Vec<Vec<Vec<Visit>>> = flat
+            .chunks(120)
+            .map(|round| round.chunks(7).map(<[Visit]>::to_vec).collect())
+            .collect();
+        assert_eq!(pooled(&recut, RegionalUpdateRule::EveryLVisits).0, lambda);
+        // Region 0 makes about 0.6 * 0.5 * 6000 / L = 180 steps.
+        assert!(seq_n[0] > 150, "{seq_n:?}");
+    }
+
+    #[test]
+    fn once_per_round_rule_is_not_the_sequential_rule() {
+        // Negative control: the rule of one step per region per round fails the same check.
+        let rec = record(30, 8, 25);
+        let (seq_lambda, seq_n) = sequential(&rec);
+        let (lambda, n) = pooled(&rec, RegionalUpdateRule::OncePerRound);
+        assert_ne!(n, seq_n);
+        assert_ne!(lambda, seq_lambda);
+        // It makes at most one step per round: n_0 <= rounds + 1.
+        assert!(n[0] <= 31, "{n:?}");
     }
 }

@@ -1,8 +1,11 @@
 //! Regional scale adaptation (regional-adaptive paper, Alg. 1, eq. 4-6) with statistics shared
 //! by all chains at the synchronisation points of a render loop: the per-chain recorder.
 
+use super::regional_params::RegionalScaleParams;
+#[cfg(doc)]
+use super::regional_params::RegionalUpdateRule;
 use super::regional_pool::{PooledRegionalScales, Visit};
-use super::{AdaptState, Controller, ScaleAdaptParams, SharedController};
+use super::{AdaptState, Controller, SharedController};
 use crate::kernel::StepInfo;
 use crate::partition::Partition;
 use crate::tunable::{HasSharedScales, SharedRegionalScales};
@@ -12,92 +15,6 @@ use crate::McmcError;
 /// of the round are not used for adaptation (a chain driven without a render loop never
 /// synchronises and would otherwise grow without bound).
 pub const MAX_VISITS_PER_ROUND: usize = 1 << 20;
-
-/// Parameters of shared regional adaptation.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RegionalScaleParams {
-    /// The sign rule of Alg. 1 per region: target acceptance `alpha*`, `L`, `gamma_max`,
-    /// `gamma_scale`, `lambda_0`, `lambda_min` (its `freeze_after_updates` is not used here;
-    /// see `freeze_after_mutations`).
-    pub adapt: ScaleAdaptParams,
-    /// `M_split`: at a refinement, split every region visited at least this many times since
-    /// the previous refinement (section 6.2); `None` never refines (grids, or a frozen tree).
-    pub split_after_visits: Option<u64>,
-    /// `M_refine`: refine at the first synchronisation point after every this many mutations
-    /// over all chains (section 6.2, 7).
-    pub refine_every: u64,
-    /// The mixture component that is the regionally scaled proposal: only its proposals
-    /// update `lambda` (Alg. 1 is about that proposal); visits for refinement count every
-    /// step. `None`: every step is one (a kernel that is only the scaled proposal).
-    pub perturbation_component: Option<usize>,
-    /// Finite adaptation: stop adapting and refining at the first synchronisation point after
-    /// this many mutations over all chains; `None` adapts forever (diminishing adaptation).
-    /// `Some(0)` never adapts (the FIXED variant with the same code path).
-    pub freeze_after_mutations: Option<u64>,
-}
-
-impl RegionalScaleParams {
-    /// The paper's values (section 8.1): `L = 10`, `gamma_max = 1`, `gamma_scale = 5`,
-    /// `lambda_0 = 1`, `lambda_min = -30`, target acceptance 0.5 (the default of section 8.1;
-    /// 0.8 for the Necklace scene), `M_split = 5000`, `M_refine = 10^7`; the scaled proposal is
-    /// mixture component 0; diminishing adaptation (no freeze).
-    #[must_use]
-    pub const fn otsu2018() -> Self {
-        Self {
-            adapt: ScaleAdaptParams::otsu2018(),
-            split_after_visits: Some(5000),
-            refine_every: 10_000_000,
-            perturbation_component: Some(0),
-            freeze_after_mutations: None,
-        }
-    }
-
-    /// The paper's parameters with `M_refine` and `M_split` scaled to a render of
-    /// `total_mutations` (over all chains): the paper's `M_refine = 10^7` and `M_split = 5000`
-    /// are tuned for about 10^9-10^10 mutations (section 8); we keep about 100 refinement
-    /// passes per render, `M_refine = max(total / 100, 1000)`, and the paper's ratio
-    /// `M_split / M_refine = 5 * 10^-4` (a leaf splits once it gets 1/2000 of a pass's
-    /// visits), with `M_split >= 4 L` so that every child can still be updated. Our choice: the
-    /// paper gives no rule.
-    #[must_use]
-    pub const fn otsu2018_for_budget(total_mutations: u64) -> Self {
-        let p = Self::otsu2018();
-        let refine = total_mutations / 100;
-        let refine = if refine < 1000 { 1000 } else { refine };
-        let split = refine / 2000;
-        let min_split = 4 * p.adapt.updates_every;
-        Self {
-            split_after_visits: Some(if split < min_split { min_split } else { split }),
-            refine_every: refine,
-            ..p
-        }
-    }
-
-    /// Checks every field's range.
-    ///
-    /// # Errors
-    /// [`McmcError::InvalidParameter`] naming the first field out of range.
-    pub fn validate(&self) -> Result<(), McmcError> {
-        self.adapt.validate()?;
-        McmcError::check_range(
-            "refine_every",
-            self.refine_every as f64,
-            1.0,
-            f64::MAX,
-            ">= 1",
-        )?;
-        if let Some(m) = self.split_after_visits {
-            McmcError::check_range("split_after_visits", m as f64, 1.0, f64::MAX, ">= 1")?;
-        }
-        Ok(())
-    }
-}
-
-impl Default for RegionalScaleParams {
-    fn default() -> Self {
-        Self::otsu2018()
-    }
-}
 
 /// Regional adaptation of a proposal's scale with statistics shared by all chains
 /// (regional-adaptive paper, Alg. 1 and section 7), deterministic for any thread count.
@@ -114,26 +31,24 @@ impl Default for RegionalScaleParams {
 ///
 /// # Alg. 1 as implemented
 /// Per region `k`, for each proposal of the scaled component from `k`: `A_k += alpha`,
-/// `i_k += 1`. At a synchronisation point, every region with `i_k >= L` updates once:
-/// `lambda_k += gamma_{n_k} sgn(A_k / i_k - alpha*)` (eq. 5: low acceptance *shrinks*
-/// `lambda`; the prose's opposite reading is wrong), `gamma_n = min(gamma_max, gamma_scale
-/// n^{-1/2})` (eq. 6; Alg. 1 line 15 is garbled), `lambda >= lambda_min`, then `i_k = A_k =
-/// 0`, `n_k += 1`. The estimate divides by the visits counted (Alg. 1's `i_k > L` would sum
-/// `L + 1` values and divide by `L`); fewer than `L` visits carry over to the next round
-/// (they were observed at the same `lambda_k`, which only changes at an update).
+/// `i_k += 1`; when `i_k = L`: `lambda_k += gamma_{n_k} sgn(A_k / i_k - alpha*)` (eq. 5: low
+/// acceptance *shrinks* `lambda`; the prose's opposite reading is wrong), `gamma_n =
+/// min(gamma_max, gamma_scale n^{-1/2})` (eq. 6; Alg. 1 line 15 is garbled), `lambda >=
+/// lambda_min`, then `i_k = A_k = 0`, `n_k += 1`. The estimate divides by the visits counted
+/// (Alg. 1's `i_k > L` would sum `L + 1` values and divide by `L`).
 ///
-/// # Staleness, and why one update per region per round
-/// Within a round every chain proposes with the scales published at the round's start, so
-/// all of a round's acceptances from region `k` were observed at the *same* `lambda_k`: they
-/// are one estimate of the acceptance at that scale, and the controller makes one sign step
-/// from it. (Applying a step for every `L` of them at the synchronisation point, as if they
-/// had been observed after each other, overshoots and makes the scales oscillate.) The price
-/// is speed: `n_k` counts synchronisation points, not blocks of `L` visits, so scales settle
-/// after a few hundred rounds (`gamma_n` reaches 0.3 after 250 updates); choose the render
-/// loop's `round_mutations` so that rounds are frequent but regions still collect `L` visits
-/// per round or two. A round costs O(visits + updated regions) plus, if any `lambda` changed,
-/// the handle's copy-on-write of the scales. A refinement likewise happens at the first
-/// synchronisation point after the `M_refine`-th mutation.
+/// # Paper speed, deterministically
+/// Chains record during a round and the pool replays the records at the synchronisation
+/// point, chain after chain in job order, through the sequential rule
+/// ([`RegionalUpdateRule::EveryLVisits`], the default): every block of `L` proposals makes one
+/// step, so `n_k` counts blocks of `L` visits as in the paper, and the scales after a round
+/// are a function of the pooled acceptance record alone (the same for any thread count).
+/// The difference from a single sequential chain is staleness: a round's proposals from
+/// region `k` were all made with the `lambda_k` published at its start. With `v_k` proposals
+/// per round from `k`, the lag is `v_k / L` steps; keep rounds short (the render loop's
+/// `round_mutations`) so that it stays a few steps. [`RegionalUpdateRule::OncePerRound`]
+/// makes at most one step per region per round instead (`n_k` counts rounds). A round costs
+/// O(visits + updated regions); each update writes one `lambda` through the handle.
 ///
 /// # Refinement (section 6.2)
 /// At the first synchronisation point after every `M_refine` mutations (all chains): every
@@ -177,6 +92,8 @@ pub struct RegionalScale {
     params: RegionalScaleParams,
     visits: Vec<Visit>,
     current_region: usize,
+    /// The current step's region comes from the handle's hint ([`Self::observe`]).
+    hinted: bool,
     steps: u64,
     dropped: u64,
     frozen: bool,
@@ -193,6 +110,7 @@ impl RegionalScale {
             params,
             visits: Vec::new(),
             current_region: 0,
+            hinted: false,
             steps: 0,
             dropped: 0,
             frozen: params.freeze_after_mutations == Some(0),
@@ -219,6 +137,11 @@ impl RegionalScale {
 
     /// Before a step: notes the region of the current state `x` under `scales` (the kernel's
     /// handle, if it has one). What [`Controller::before_step`] does.
+    ///
+    /// Without refinement only the scaled proposal's steps need a region, and that proposal
+    /// looks up the region of `x` itself: if the handle records it
+    /// ([`SharedRegionalScales::clear_region_hint`]), the lookup is left to the proposal and
+    /// [`Self::record_from`] reads it back (the same region, one lookup fewer per step).
     pub fn observe<S, Sc>(&mut self, scales: Option<&Sc>, x: &S)
     where
         Sc: SharedRegionalScales,
@@ -228,24 +151,41 @@ impl RegionalScale {
             return;
         }
         if let Some(s) = scales {
-            self.current_region = s.partition().region(x);
+            self.hinted = self.params.split_after_visits.is_none() && s.clear_region_hint();
+            if !self.hinted {
+                self.current_region = s.partition().region(x);
+            }
         }
     }
 
-    /// After a step: records its visit and acceptance. What [`Controller::after_step`] does.
+    /// After a step: records its visit and acceptance, the region as [`Self::observe`] found
+    /// it. What [`Controller::after_step`] does.
     pub fn record(&mut self, info: &StepInfo) {
+        self.record_from::<NoScales>(None, info);
+    }
+
+    /// As [`Self::record`], reading the region from the handle's hint when [`Self::observe`]
+    /// left the lookup to the proposal. Steps of other proposals are then only counted (no
+    /// refinement needs their visits).
+    pub fn record_from<Sc: SharedRegionalScales>(&mut self, scales: Option<&Sc>, info: &StepInfo) {
         self.steps += 1;
         if self.frozen {
-            return;
-        }
-        if self.visits.len() >= MAX_VISITS_PER_ROUND {
-            self.dropped += 1;
             return;
         }
         let perturbed = self
             .params
             .perturbation_component
             .is_none_or(|c| c == info.component);
+        if self.hinted {
+            match scales.and_then(SharedRegionalScales::region_hint) {
+                Some(region) if perturbed => self.current_region = region,
+                _ => return,
+            }
+        }
+        if self.visits.len() >= MAX_VISITS_PER_ROUND {
+            self.dropped += 1;
+            return;
+        }
         self.visits.push(Visit {
             region: self.current_region as u32,
             perturbed,
@@ -295,8 +235,8 @@ where
         self.observe(kernel.shared_scales(), x);
     }
 
-    fn after_step(&mut self, _kernel: &mut K, info: &StepInfo) {
-        self.record(info);
+    fn after_step(&mut self, kernel: &mut K, info: &StepInfo) {
+        self.record_from(kernel.shared_scales(), info);
     }
 
     fn is_frozen(&self) -> bool {
@@ -324,14 +264,54 @@ where
     }
 }
 
-/// The state `(i_k, A_k, n_k)` of one region: an [`AdaptState`] and the visits counted for
-/// refinement.
+/// The state `(i_k, A_k, n_k)` of one region: an [`AdaptState`], the visits counted for
+/// refinement, and a diagnostic of its recent acceptance.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RegionStats {
     /// Sign-rule state.
     pub adapt: AdaptState,
     /// Visits since the last refinement pass.
     pub visits_since_refine: u64,
+    /// Proposals of the scaled component made from this region since it was created.
+    pub proposals: u64,
+    /// The acceptance probability of the region's recent proposals: the running mean over
+    /// its first [`RECENT_WINDOW`] proposals, then an exponential moving average with weight
+    /// `1 / RECENT_WINDOW` (NaN before the first proposal). A diagnostic only; the sign rule
+    /// uses `adapt`.
+    pub recent_acceptance: f64,
+}
+
+/// The window (in proposals) of [`RegionStats::recent_acceptance`].
+pub const RECENT_WINDOW: u64 = 200;
+
+impl RegionStats {
+    /// A fresh region (`n = 1`, nothing seen).
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            adapt: AdaptState::new(),
+            visits_since_refine: 0,
+            proposals: 0,
+            recent_acceptance: f64::NAN,
+        }
+    }
+
+    /// Adds one proposal's acceptance probability to the diagnostic.
+    pub(super) fn note_proposal(&mut self, accept: f64) {
+        self.proposals += 1;
+        if self.recent_acceptance.is_nan() {
+            self.recent_acceptance = accept;
+            return;
+        }
+        let w = self.proposals.min(RECENT_WINDOW) as f64;
+        self.recent_acceptance += (accept - self.recent_acceptance) / w;
+    }
+}
+
+impl Default for RegionStats {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 #[cfg(test)]
@@ -339,14 +319,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn budget_scaling_keeps_the_papers_ratio() {
-        let p = RegionalScaleParams::otsu2018_for_budget(1_000_000_000);
-        assert_eq!(p.refine_every, 10_000_000);
-        assert_eq!(p.split_after_visits, Some(5000));
-        let small = RegionalScaleParams::otsu2018_for_budget(10_000);
-        assert_eq!(small.refine_every, 1000);
-        assert_eq!(small.split_after_visits, Some(40));
-        assert!(small.validate().is_ok());
+    fn invalid_parameters_are_refused() {
         let bad = RegionalScaleParams {
             refine_every: 0,
             ..RegionalScaleParams::otsu2018()
@@ -357,5 +330,31 @@ mod tests {
             ..RegionalScaleParams::otsu2018()
         };
         assert!(RegionalScale::new(bad).is_err());
+    }
+}
+
+/// A handle type for [`RegionalScale::record`], which reads no handle.
+#[derive(Clone)]
+enum NoScales {}
+
+impl SharedRegionalScales for NoScales {
+    type Partition = ();
+    fn partition(&self) -> &() {
+        match *self {}
+    }
+    fn num_regions(&self) -> usize {
+        match *self {}
+    }
+    fn log_scale_of(&self, _region: usize) -> f64 {
+        match *self {}
+    }
+    fn set_log_scale_of(&mut self, _region: usize, _lambda: f64) {
+        match *self {}
+    }
+    fn split_region(&mut self, _region: usize) -> Option<std::ops::Range<usize>> {
+        match *self {}
+    }
+    fn same_as(&self, _other: &Self) -> bool {
+        match *self {}
     }
 }

@@ -14,7 +14,7 @@ use super::sigmas::{HasSharedSigmas, SharedSigmas};
 use crate::error::PathspaceError;
 use crate::path::Path;
 
-pub use mcmc_core::controller::MAX_VISITS_PER_ROUND;
+pub use mcmc_core::controller::{RegionalUpdateRule, MAX_VISITS_PER_ROUND};
 
 /// Parameters of shared regional adaptation: mcmc-core's [`RegionalScaleParams`] (the paper's
 /// values are [`RegionalScaleParams::otsu2018`]; the scaled proposal is component 0 of
@@ -91,8 +91,8 @@ where
         self.0.observe(kernel.shared_sigmas(), x);
     }
 
-    fn after_step(&mut self, _kernel: &mut K, info: &StepInfo) {
-        self.0.record(info);
+    fn after_step(&mut self, kernel: &mut K, info: &StepInfo) {
+        self.0.record_from(kernel.shared_sigmas(), info);
     }
 
     fn is_frozen(&self) -> bool {

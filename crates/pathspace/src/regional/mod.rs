@@ -83,7 +83,8 @@ mod plane;
 mod sigmas;
 
 pub use controller::{
-    PooledRegionalStats, RegionalAdaptParams, SharedRegionalAdaptation, MAX_VISITS_PER_ROUND,
+    PooledRegionalStats, RegionalAdaptParams, RegionalUpdateRule, SharedRegionalAdaptation,
+    MAX_VISITS_PER_ROUND,
 };
 pub use partition::{
     canonical_4d, cylindrical, first_nonspecular_direction, screen_coordinates, DirectionPartition,

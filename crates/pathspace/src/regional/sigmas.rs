@@ -1,7 +1,9 @@
 //! Per-region angular scales over a path-space partition (regional-adaptive paper, section 5.2,
-//! eq. 2-3), shared read-only by all chains between synchronisation points.
+//! eq. 2-3), shared read-only by all chains between synchronisation points and written in
+//! place at them.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use mcmc_core::controller::SharedRegionalScales;
@@ -39,13 +41,107 @@ use crate::scene::{Camera, PathScene};
 /// assert!(sigmas.lambdas().iter().all(|&l| (l - (0.01f64).ln()).abs() < 1e-12));
 /// assert!((sigmas.sigmas_of_region(2)[0] - 0.1).abs() < 1e-12);
 /// ```
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct RegionalSigmas<P> {
-    /// Behind its own `Arc`: publishing new scales copies the `lambda`s (8 bytes per region),
-    /// the partition only when it is refined.
+    /// Behind its own `Arc`: a copy of the scales (a split while chains hold them) shares the
+    /// partition until it is refined.
     partition: Arc<P>,
-    lambdas: Vec<f64>,
+    /// `[lambda_k, sigma_k = e^{lambda_k / 2}]` as `f64` bits (the scale is kept so that a
+    /// proposal reads it without an `exp`). Atomics so that a [`SharedSigmas`] handle can write
+    /// in place at a synchronisation point while every chain's handle points at the same
+    /// scales (no copy of the array per round); chains only read them between
+    /// synchronisation points, so relaxed loads and stores suffice (the render loop's round
+    /// boundary orders them).
+    lambdas: Vec<[AtomicU64; 2]>,
     sigma_ratio: f64,
+}
+
+impl<P> Clone for RegionalSigmas<P> {
+    fn clone(&self) -> Self {
+        Self {
+            partition: Arc::clone(&self.partition),
+            lambdas: self
+                .lambdas
+                .iter()
+                .map(|l| {
+                    l.each_ref()
+                        .map(|a| AtomicU64::new(a.load(Ordering::Relaxed)))
+                })
+                .collect(),
+            sigma_ratio: self.sigma_ratio,
+        }
+    }
+}
+
+/// `sigma = e^{lambda / 2}` (Alg. 1 line 9).
+#[inline]
+fn sigma_of(lambda: f64) -> f64 {
+    (0.5 * lambda).exp()
+}
+
+/// A region's stored `[lambda, sigma]`.
+fn entry(lambda: f64) -> [AtomicU64; 2] {
+    [
+        AtomicU64::new(lambda.to_bits()),
+        AtomicU64::new(sigma_of(lambda).to_bits()),
+    ]
+}
+
+impl<P> RegionalSigmas<P> {
+    /// `lambda_k` of a region.
+    ///
+    /// # Panics
+    /// If `region >= num_regions()`.
+    #[must_use]
+    #[inline]
+    pub fn lambda(&self, region: usize) -> f64 {
+        f64::from_bits(self.lambdas[region][0].load(Ordering::Relaxed))
+    }
+
+    /// `lambda_k` per region id (a copy, for diagnostics).
+    #[must_use]
+    pub fn lambdas(&self) -> Vec<f64> {
+        (0..self.lambdas.len()).map(|k| self.lambda(k)).collect()
+    }
+
+    /// Number of regions.
+    #[must_use]
+    pub fn num_regions(&self) -> usize {
+        self.lambdas.len()
+    }
+
+    /// Sets `lambda` of a region.
+    ///
+    /// # Panics
+    /// If `region >= num_regions()`.
+    pub fn set_lambda(&mut self, region: usize, lambda: f64) {
+        self.lambdas[region] = entry(lambda);
+    }
+
+    /// Sets `lambda` of a region through a shared reference: only at a synchronisation point,
+    /// when no chain reads the scales.
+    fn store_lambda(&self, region: usize, lambda: f64) {
+        let [l, s] = &self.lambdas[region];
+        l.store(lambda.to_bits(), Ordering::Relaxed);
+        s.store(sigma_of(lambda).to_bits(), Ordering::Relaxed);
+    }
+
+    /// `sigma_2 / sigma_1`.
+    #[must_use]
+    pub fn sigma_ratio(&self) -> f64 {
+        self.sigma_ratio
+    }
+
+    /// `[sigma_1, sigma_2]` of a region.
+    ///
+    /// # Panics
+    /// If `region >= num_regions()`.
+    #[must_use]
+    #[inline]
+    pub fn sigmas_of_region(&self, region: usize) -> [f64; 2] {
+        let s = f64::from_bits(self.lambdas[region][1].load(Ordering::Relaxed));
+        [s, s * self.sigma_ratio]
+    }
 }
 
 impl<P: Partition<Path>> RegionalSigmas<P> {
@@ -61,7 +157,7 @@ impl<P: Partition<Path>> RegionalSigmas<P> {
         let n = partition.num_regions();
         Ok(Self {
             partition: Arc::new(partition),
-            lambdas: vec![lambda0; n],
+            lambdas: (0..n).map(|_| entry(lambda0)).collect(),
             sigma_ratio,
         })
     }
@@ -72,42 +168,6 @@ impl<P: Partition<Path>> RegionalSigmas<P> {
         &self.partition
     }
 
-    /// `lambda_k` per region id.
-    #[must_use]
-    pub fn lambdas(&self) -> &[f64] {
-        &self.lambdas
-    }
-
-    /// Number of regions.
-    #[must_use]
-    pub fn num_regions(&self) -> usize {
-        self.lambdas.len()
-    }
-
-    /// Sets `lambda` of a region.
-    ///
-    /// # Panics
-    /// If `region >= num_regions()`.
-    pub fn set_lambda(&mut self, region: usize, lambda: f64) {
-        self.lambdas[region] = lambda;
-    }
-
-    /// `sigma_2 / sigma_1`.
-    #[must_use]
-    pub fn sigma_ratio(&self) -> f64 {
-        self.sigma_ratio
-    }
-
-    /// `[sigma_1, sigma_2]` of a region.
-    ///
-    /// # Panics
-    /// If `region >= num_regions()`.
-    #[must_use]
-    pub fn sigmas_of_region(&self, region: usize) -> [f64; 2] {
-        let s = (0.5 * self.lambdas[region]).exp();
-        [s, s * self.sigma_ratio]
-    }
-
     /// Splits a region of the partition; every child inherits its `lambda` (section 6.2).
     /// Returns the fresh ids (the split id is the first child), `None` if it cannot split.
     pub fn split(&mut self, region: usize) -> Option<Range<usize>>
@@ -115,10 +175,11 @@ impl<P: Partition<Path>> RegionalSigmas<P> {
         P: Clone,
     {
         let fresh = Arc::make_mut(&mut self.partition).split(region)?;
-        let parent = self.lambdas[region];
-        self.lambdas.resize(self.partition.num_regions(), parent);
+        let parent = self.lambda(region);
+        self.lambdas
+            .resize_with(self.partition.num_regions(), || entry(parent));
         for k in fresh.clone() {
-            self.lambdas[k] = parent;
+            self.lambdas[k] = entry(parent);
         }
         Some(fresh)
     }
@@ -149,12 +210,12 @@ impl<C: Camera> RegionalSigmas<PathPartition<C>> {
         let centre = |i: usize, n: usize| (i as f64 + 0.5) / n as f64;
         let mut map = Vec::with_capacity(width * height);
         match &*self.partition {
-            PathPartition::Single => map.resize(width * height, sigma(self.lambdas[0])),
+            PathPartition::Single => map.resize(width * height, sigma(self.lambda(0))),
             PathPartition::Screen(p) => {
                 for y in 0..height {
                     for x in 0..width {
                         let k = p.plane().region([centre(x, width), centre(y, height)]);
-                        map.push(sigma(self.lambdas[k]));
+                        map.push(sigma(self.lambda(k)));
                     }
                 }
             }
@@ -169,7 +230,7 @@ impl<C: Camera> RegionalSigmas<PathPartition<C>> {
                                 let [lo, hi] = leaves.bounds(l);
                                 let mid = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
                                 let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
-                                area * self.lambdas[p.region_of_point(screen, mid)]
+                                area * self.lambda(p.region_of_point(screen, mid))
                             })
                             .sum::<f64>()
                     })
@@ -195,21 +256,48 @@ impl<P: Partition<Path>> ScaleSource for RegionalSigmas<P> {
 
 /// A [`RegionalSigmas`] behind an [`Arc`]: what every chain's perturbation holds. Chains read
 /// it without locks; the shared controller
-/// ([`crate::regional::SharedRegionalAdaptation`]) publishes a new one at each
-/// synchronisation point of the render loop. Cloning is cheap (a reference count).
-#[derive(Clone, Debug)]
-pub struct SharedSigmas<P>(Arc<RegionalSigmas<P>>);
+/// ([`crate::regional::SharedRegionalAdaptation`]) writes its `lambda`s in place at the
+/// synchronisation points of the render loop (all clones see them from the next round) and
+/// hands every chain a new handle only after a split. Cloning is cheap (a reference count).
+///
+/// Each handle also records, on request of the controller, the region of the first path it is
+/// asked about (the perturbation's current state), so that the controller need not look it
+/// up again ([`SharedRegionalScales::clear_region_hint`]); the record is the handle's own,
+/// never shared.
+#[derive(Debug)]
+pub struct SharedSigmas<P> {
+    sigmas: Arc<RegionalSigmas<P>>,
+    /// `NO_HINT` (not recording), `WANT_HINT` (recording), or the recorded region.
+    hint: AtomicU64,
+}
+
+/// [`SharedSigmas::hint`]: not recording.
+const NO_HINT: u64 = u64::MAX;
+/// [`SharedSigmas::hint`]: recording the next region asked for.
+const WANT_HINT: u64 = u64::MAX - 1;
+
+impl<P> Clone for SharedSigmas<P> {
+    fn clone(&self) -> Self {
+        Self {
+            sigmas: Arc::clone(&self.sigmas),
+            hint: AtomicU64::new(NO_HINT),
+        }
+    }
+}
 
 impl<P> SharedSigmas<P> {
     /// Shares `sigmas`.
     pub fn new(sigmas: RegionalSigmas<P>) -> Self {
-        Self(Arc::new(sigmas))
+        Self {
+            sigmas: Arc::new(sigmas),
+            hint: AtomicU64::new(NO_HINT),
+        }
     }
 
     /// The scales.
     #[must_use]
     pub fn get(&self) -> &RegionalSigmas<P> {
-        &self.0
+        &self.sigmas
     }
 
     /// Mutable access, copying the scales first if another holder still shares them.
@@ -217,18 +305,21 @@ impl<P> SharedSigmas<P> {
     where
         P: Clone,
     {
-        Arc::make_mut(&mut self.0)
+        Arc::make_mut(&mut self.sigmas)
     }
 
     /// True if both share the same allocation.
     #[must_use]
     pub fn ptr_eq(&self, other: &Self) -> bool {
-        Arc::ptr_eq(&self.0, &other.0)
+        Arc::ptr_eq(&self.sigmas, &other.sigmas)
     }
 }
 
-/// The handle mcmc-core's shared regional controller reads and publishes: `lambda` writes and
-/// splits copy the scales first if another chain still holds them (`Arc::make_mut`).
+/// The handle mcmc-core's shared regional controller reads and publishes. `lambda` writes go
+/// in place to the scales every chain's handle shares (the controller writes only at
+/// synchronisation points, when no chain steps): a round costs no copy of the `lambda` array,
+/// however many regions there are. Splits copy the scales first if another chain still holds
+/// them (`Arc::make_mut`; once per refinement pass).
 impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
     type Partition = P;
     fn partition(&self) -> &P {
@@ -238,10 +329,10 @@ impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
         self.get().num_regions()
     }
     fn log_scale_of(&self, region: usize) -> f64 {
-        self.get().lambdas()[region]
+        self.get().lambda(region)
     }
     fn set_log_scale_of(&mut self, region: usize, lambda: f64) {
-        self.make_mut().set_lambda(region, lambda);
+        self.get().store_lambda(region, lambda);
     }
     fn split_region(&mut self, region: usize) -> Option<Range<usize>> {
         self.make_mut().split(region)
@@ -249,11 +340,23 @@ impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
     fn same_as(&self, other: &Self) -> bool {
         self.ptr_eq(other)
     }
+    fn clear_region_hint(&self) -> bool {
+        self.hint.store(WANT_HINT, Ordering::Relaxed);
+        true
+    }
+    fn region_hint(&self) -> Option<usize> {
+        let h = self.hint.load(Ordering::Relaxed);
+        (h < WANT_HINT).then_some(h as usize)
+    }
 }
 
 impl<P: Partition<Path>> ScaleSource for SharedSigmas<P> {
     fn sigmas(&self, x: &Path) -> [f64; 2] {
-        self.0.sigmas(x)
+        let region = self.sigmas.partition.region(x);
+        if self.hint.load(Ordering::Relaxed) == WANT_HINT {
+            self.hint.store(region as u64, Ordering::Relaxed);
+        }
+        self.sigmas.sigmas_of_region(region)
     }
 }
 

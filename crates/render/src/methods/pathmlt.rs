@@ -3,7 +3,7 @@
 //! adapted per region (Otsu et al. 2018; [`crate::mlt::pathmlt`]).
 
 use mcmc_core::render_loop::NormalizationMode;
-use pathspace::regional::RegionalAdaptParams;
+use pathspace::regional::RegionalUpdateRule;
 use pathspace::PerturbationKind;
 
 use super::{
@@ -11,7 +11,10 @@ use super::{
     RenderOutput, RenderSettings, Run, MAX_BOOTSTRAP_SAMPLES, MAX_CHAINS,
 };
 use crate::error::RenderError;
-use crate::mlt::pathmlt::{adapt_params, render_adaptive_with_params, PathAdapt, PATHMLT_SIGMA};
+use crate::mlt::pathmlt::{
+    adapt_params, render_scaled, AdaptRender, PathAdapt, ADAPT_ROUND_MUTATIONS,
+    PATHMLT_PAPER_SIGMA, PATHMLT_SIGMA,
+};
 use crate::mlt::{LargeStepMode, MltSettings};
 use crate::scene::Scene;
 
@@ -26,12 +29,20 @@ pub struct PathMltSettings {
     pub perturbation: PerturbationKind,
     /// How the perturbation's angular scale is adapted (default fixed).
     pub adapt: PathAdapt,
-    /// RA-QUADTREE: scale `M_refine` and `M_split` to this many mutations over all chains
-    /// (`RegionalAdaptParams::otsu2018_for_budget`), e.g. the count FIXED reached in the same
-    /// time. `None` (the preset): scaled to the mutation budget under equal samples, the
-    /// paper's `M_refine = 10^7`, `M_split = 5000` under a time budget
-    /// ([`crate::mlt::pathmlt::adapt_params`]).
-    pub refine_for_mutations: Option<u64>,
+    /// FIXED's angular scale and the adaptive variants' start (radians, the standard
+    /// deviation of the perturbation's truncated-normal polar angle): [`PATHMLT_PAPER_SIGMA`]
+    /// (`lambda = 1`, the paper's FIXED, section 8.1) in the `otsu2018` preset,
+    /// [`PATHMLT_SIGMA`] (0.02 rad, "tuned FIXED") by default. `(0, pi]`.
+    pub sigma: f64,
+    /// The target acceptance `alpha*` of the adaptive variants (the paper's 0.5; 0.8 for its
+    /// Necklace scene, section 8.1). `(0, 1)`.
+    pub target_acceptance: f64,
+    /// Mutations per chain between synchronisation points of the adaptive variants
+    /// ([`ADAPT_ROUND_MUTATIONS`]; 1..=1000000).
+    pub round_mutations: u64,
+    /// When the adaptive variants' sign steps happen (the paper's one per `L` visits by
+    /// default; `OncePerRound` is the slower rule kept for comparison).
+    pub update_rule: RegionalUpdateRule,
     /// RA-QUADTREE: `M_split` instead of the scheduled one (`None`: the schedule's).
     pub split_after_visits: Option<u64>,
     /// How the image's normalisation `b` is estimated (as [`super::ChainSettings`]'s; path-space
@@ -39,9 +50,14 @@ pub struct PathMltSettings {
     pub normalization: NormalizationMode,
 }
 
+/// chainlight's default: the `otsu2018` preset with the lens perturbation, FIXED, at the tuned
+/// scale [`PATHMLT_SIGMA`].
 impl Default for PathMltSettings {
     fn default() -> Self {
-        Self::otsu2018(PerturbationKind::Lens, PathAdapt::Fixed)
+        Self {
+            sigma: PATHMLT_SIGMA,
+            ..Self::otsu2018(PerturbationKind::Lens, PathAdapt::Fixed)
+        }
     }
 }
 
@@ -49,8 +65,9 @@ impl PathMltSettings {
     /// Otsu et al. 2018, section 8.1: the perturbation (`Lens`: the 2-D partition of the
     /// primary ray's raster position; `MultiChain`: the 4-D partition) and the bidirectional
     /// mutation, 0.5 each, with scale adaptation `adapt` (FIXED, GLOBAL, RA-GRID,
-    /// RA-QUADTREE) from [`PATHMLT_SIGMA`] toward acceptance 0.5 (docs/methods/
-    /// regional-adaptive.md lists the readings).
+    /// RA-QUADTREE) from the paper's `lambda = 1` ([`PATHMLT_PAPER_SIGMA`], also FIXED's
+    /// scale) toward acceptance 0.5, one sign step per `L` visits, `M_split`, `M_refine` from
+    /// the pixel count (docs/methods/regional-adaptive.md lists the readings).
     #[must_use]
     pub const fn otsu2018(perturbation: PerturbationKind, adapt: PathAdapt) -> Self {
         Self {
@@ -58,10 +75,31 @@ impl PathMltSettings {
             bootstrap_samples: 100_000,
             perturbation,
             adapt,
-            refine_for_mutations: None,
+            sigma: PATHMLT_PAPER_SIGMA,
+            target_acceptance: 0.5,
+            round_mutations: ADAPT_ROUND_MUTATIONS,
+            update_rule: RegionalUpdateRule::EveryLVisits,
             split_after_visits: None,
             normalization: NormalizationMode::Pooled,
         }
+    }
+
+    /// [`Self::otsu2018`] at target acceptance 0.8, as the paper's Necklace scene (glossy
+    /// and diffuse surfaces, section 8.1).
+    #[must_use]
+    pub const fn otsu2018_necklace(perturbation: PerturbationKind, adapt: PathAdapt) -> Self {
+        let mut s = Self::otsu2018(perturbation, adapt);
+        s.target_acceptance = 0.8;
+        s
+    }
+
+    /// [`Self::otsu2018`] at the tuned scale [`PATHMLT_SIGMA`] ("tuned FIXED", and the
+    /// adaptive variants started there).
+    #[must_use]
+    pub const fn tuned(perturbation: PerturbationKind, adapt: PathAdapt) -> Self {
+        let mut s = Self::otsu2018(perturbation, adapt);
+        s.sigma = PATHMLT_SIGMA;
+        s
     }
 }
 
@@ -100,6 +138,27 @@ impl Method for PathMltSettings {
         if self.split_after_visits == Some(0) {
             return Err(RenderError::setting("split-after-visits", 0, ">= 1"));
         }
+        if !(self.sigma > 0.0 && self.sigma <= std::f64::consts::PI) {
+            return Err(RenderError::setting(
+                "sigma",
+                self.sigma,
+                "(0, pi] radians, or paper|tuned",
+            ));
+        }
+        if !(self.target_acceptance > 0.0 && self.target_acceptance < 1.0) {
+            return Err(RenderError::setting(
+                "target-acceptance",
+                self.target_acceptance,
+                "(0, 1)",
+            ));
+        }
+        if !(1..=1_000_000).contains(&self.round_mutations) {
+            return Err(RenderError::setting(
+                "round-mutations",
+                self.round_mutations,
+                "1..=1000000",
+            ));
+        }
         validate_normalization(self.normalization)
     }
 
@@ -122,24 +181,26 @@ impl Method for PathMltSettings {
             shard: run.shard,
             normalization: self.normalization,
         };
-        let mut params = adapt_params(self.adapt, &mlt_settings);
+        let mut params = adapt_params(self.adapt, self.perturbation, self.sigma, &mlt_settings);
+        params.adapt.target_acceptance = self.target_acceptance;
+        params.update_rule = self.update_rule;
         if self.adapt == PathAdapt::Quadtree {
-            if let Some(m) = self.refine_for_mutations {
-                let scaled = RegionalAdaptParams::otsu2018_for_budget(m);
-                params.split_after_visits = scaled.split_after_visits;
-                params.refine_every = scaled.refine_every;
-            }
             if let Some(m) = self.split_after_visits {
                 params.split_after_visits = Some(m);
             }
         }
-        let (out, sigma_map, summary) = render_adaptive_with_params(
+        let run_settings = AdaptRender {
+            kind: self.perturbation,
+            adapt: self.adapt,
+            sigma: self.sigma,
+            round_mutations: self.round_mutations,
+            max_depth: common.max_depth,
+            params,
+        };
+        let (out, sigma_map, summary) = render_scaled(
             scene,
-            self.perturbation,
-            self.adapt,
-            common.max_depth,
+            &run_settings,
             &mlt_settings,
-            &params,
             run.progress,
             run.cancel,
         )?;
@@ -154,9 +215,11 @@ impl Method for PathMltSettings {
                 PerturbationKind::MultiChain => "multi-chain",
             },
             match self.adapt {
-                PathAdapt::Fixed => format!("{PATHMLT_SIGMA} rad, fixed"),
+                PathAdapt::Fixed => format!("{:.4} rad, fixed", self.sigma),
                 a => format!(
-                    "from {PATHMLT_SIGMA} rad, adapted per region: --adapt {}",
+                    "from {:.4} rad, adapted per region toward acceptance {}: --adapt {}",
+                    self.sigma,
+                    self.target_acceptance,
                     a.name()
                 ),
             }
