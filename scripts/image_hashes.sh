@@ -59,7 +59,7 @@ cases=(
   "drmlt-cte|--integrator drmlt --dr-variant cheap-then-expensive"
   "drmlt-pt|--integrator drmlt --dr-on pssmlt-pt"
   "drmlt-tm-pt|--integrator drmlt --dr-variant tierney-mira --dr-on pssmlt-pt"
-  "drmlt-direct|--integrator drmlt --direct-depth 1"
+  "drmlt-direct|--integrator drmlt --direct-samples 4 --direct-depth 1"
   "drmlt-fixed-strategy|--integrator drmlt --dr-on mmlt --dr-fixed-strategy"
   "mala-values|--integrator mala --mala-preset paper-values"
   "mala-hybrid-values|--integrator mala-hybrid --mala-preset paper-values"
