@@ -15,18 +15,19 @@
 //! [`STATIONARITY_TESTS`] tests (false-failure probability 0.01 for the file); the negative
 //! control must fail at the same level. Pairwise checks are identities (1e-9 relative).
 
-use mcmc_core::langevin::{AnyAdaptation, LangevinParams, LangevinSpace, ProposalGaussian};
+use mcmc_core::langevin::{AnyAdaptation, LangevinParams};
 use mcmc_core::testing::{
     assert_path_balance, sidak_alpha, stationarity_test, PairwiseParams, StationarityParams,
 };
 use mcmc_core::toy::wrap;
 use mcmc_core::{Chain, Kernel, NoAdaptation};
 use proptest::prelude::*;
-use pss::langevin::PssCoordinates;
 use pss::mala::{
     cheap_then_expensive_kernel, mala_kernel, MalaChainKernel, MalaParams, MalaVariant,
 };
-use pss::testing::{pss_stationarity_test, ExactPssTarget, LobeChoice};
+use pss::testing::{
+    pss_stationarity_test, BlindPssCoordinates, Blindness, ExactPssTarget, LobeChoice,
+};
 use pss::{KelemenParams, LargeStep, PssState, SmallMutation};
 use rand::SeedableRng;
 
@@ -168,43 +169,18 @@ fn cheap_then_expensive_keeps_the_discrete_numbers_and_is_exact() {
     }
 }
 
-/// The coordinates of [`PssCoordinates`] with a layout check that compares the read counts
-/// only, not the discrete tags (the negative control).
-#[derive(Clone, Copy, Debug)]
-struct IgnoresTags;
-
-impl LangevinSpace<PssState> for IgnoresTags {
-    fn read(&self, x: &PssState, out: &mut Vec<f64>) {
-        PssCoordinates.read(x, out);
-    }
-    fn write(&self, x: &PssState, coords: &[f64], y: &mut PssState) -> bool {
-        PssCoordinates.write(x, coords, y)
-    }
-    fn log_q(&self, q: &ProposalGaussian, from: &[f64], to: &[f64]) -> f64 {
-        PssCoordinates.log_q(q, from, to)
-    }
-    fn wraps(&self) -> bool {
-        true
-    }
-    fn ghost(&self, x: &[f64], y: &[f64], z: &[f64], out: &mut Vec<f64>) {
-        PssCoordinates.ghost(x, y, z, out);
-    }
-    fn same_layout(&self, x: &PssState, y: &PssState) -> bool {
-        x.read_counts() == y.read_counts()
-    }
-    fn same_slice(&self, x: &PssState, y: &PssState) -> bool {
-        PssCoordinates.same_slice(x, y)
-    }
-}
-
 #[test]
 fn negative_control_ignoring_the_tags_of_the_candidate_fails() {
     // The paper's step (sigma 0.1): moves cross the tag boundaries often.
     let p = LangevinParams::luan2020();
-    let kernel = mcmc_core::langevin::Langevin::new(p, mcmc_core::langevin::Plain, IgnoresTags)
-        .unwrap()
-        .with_large_step(LargeStep, 0.1)
-        .unwrap();
+    let kernel = mcmc_core::langevin::Langevin::new(
+        p,
+        mcmc_core::langevin::Plain,
+        BlindPssCoordinates(Blindness::Tags),
+    )
+    .unwrap()
+    .with_large_step(LargeStep, 0.1)
+    .unwrap();
     let target = LobeChoice::default();
     let report = stationarity_test(
         &target,

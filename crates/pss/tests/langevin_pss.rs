@@ -23,7 +23,10 @@ use mcmc_core::toy::{wrap, TorusMixture};
 use mcmc_core::{Chain, Kernel, NoAdaptation};
 use proptest::prelude::*;
 use pss::langevin::PssCoordinates;
-use pss::testing::{pss_stationarity_test, ExactPssTarget, OnPss, RoulettePath, Stripes};
+use pss::testing::{
+    pss_stationarity_test, BlindPssCoordinates, Blindness, ExactPssTarget, OnPss, RoulettePath,
+    Stripes,
+};
 use pss::{LargeStep, PssState};
 use rand::SeedableRng;
 
@@ -251,34 +254,14 @@ fn cheap_then_expensive_keeps_the_read_set() {
     report.assert_passes("stripes / cheap-then-expensive", STATIONARITY_TESTS);
 }
 
-/// PSS coordinates that report every candidate as keeping the read set: the first stage of
-/// cheap-then-expensive then accepts moves into and out of the stripes (the second stage still
-/// rejects them, through its dimension check), which is the kernel before the fix.
-#[derive(Clone, Copy, Debug)]
-struct IgnoresReadSet;
-
-impl LangevinSpace<PssState> for IgnoresReadSet {
-    fn read(&self, x: &PssState, out: &mut Vec<f64>) {
-        PssCoordinates.read(x, out);
-    }
-    fn write(&self, x: &PssState, coords: &[f64], y: &mut PssState) -> bool {
-        PssCoordinates.write(x, coords, y)
-    }
-    fn log_q(&self, q: &ProposalGaussian, from: &[f64], to: &[f64]) -> f64 {
-        PssCoordinates.log_q(q, from, to)
-    }
-    fn wraps(&self) -> bool {
-        true
-    }
-    fn ghost(&self, x: &[f64], y: &[f64], z: &[f64], out: &mut Vec<f64>) {
-        PssCoordinates.ghost(x, y, z, out);
-    }
-}
-
 #[test]
 fn negative_control_cheap_then_expensive_across_read_sets_fails() {
     let target = Stripes::narrow();
-    let report = stripe_share_test(&target, &cheap_then_expensive(IgnoresReadSet), 11);
+    let report = stripe_share_test(
+        &target,
+        &cheap_then_expensive(BlindPssCoordinates(Blindness::ReadSet)),
+        11,
+    );
     eprintln!("negative control (first stage across read sets): {report}");
     assert!(
         report.rejects(sidak_alpha(0.01, STATIONARITY_TESTS)),

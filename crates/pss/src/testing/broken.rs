@@ -1,9 +1,12 @@
 //! PSS negative controls: an asymmetric proposal (correct only with its Hastings term) and a
-//! small step that clamps at the torus seam instead of wrapping.
+//! small step that clamps at the torus seam instead of wrapping; PSS coordinates for the
+//! Langevin kernels with part of their candidate check left out.
 
+use mcmc_core::langevin::{LangevinSpace, ProposalGaussian};
 use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
+use crate::langevin::PssCoordinates;
 use crate::{KelemenParams, PssError, PssState, SmallMutation, SmallStep};
 
 /// An honest *asymmetric* PSS proposal: the wrapped Gaussian small step with a sigma that
@@ -94,5 +97,52 @@ impl Proposal<PssState> for ClampedKelemen {
 
     fn is_symmetric(&self) -> bool {
         true
+    }
+}
+
+/// Which part of [`PssCoordinates`]'s candidate check [`BlindPssCoordinates`] leaves out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Blindness {
+    /// Every candidate keeps the read set (the layout and slice checks always pass): a
+    /// cheap-then-expensive first stage then accepts moves between read sets.
+    ReadSet,
+    /// The layout check compares read counts only, not the discrete tags: a move may
+    /// differentiate, as continuous, a number that was a discrete choice where it started.
+    Tags,
+}
+
+/// [`PssCoordinates`] with part of its candidate check left out: a negative control for
+/// the Langevin kernels' read-set and continuous-coordinate rules (it must fail the
+/// stationarity tests; pairwise flows use the same wrong density at both ends and balance).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BlindPssCoordinates(pub Blindness);
+
+impl LangevinSpace<PssState> for BlindPssCoordinates {
+    fn read(&self, x: &PssState, out: &mut Vec<f64>) {
+        PssCoordinates.read(x, out);
+    }
+    fn write(&self, x: &PssState, coords: &[f64], y: &mut PssState) -> bool {
+        PssCoordinates.write(x, coords, y)
+    }
+    fn log_q(&self, q: &ProposalGaussian, from: &[f64], to: &[f64]) -> f64 {
+        PssCoordinates.log_q(q, from, to)
+    }
+    fn wraps(&self) -> bool {
+        true
+    }
+    fn ghost(&self, x: &[f64], y: &[f64], z: &[f64], out: &mut Vec<f64>) {
+        PssCoordinates.ghost(x, y, z, out);
+    }
+    fn same_layout(&self, x: &PssState, y: &PssState) -> bool {
+        match self.0 {
+            Blindness::ReadSet => true,
+            Blindness::Tags => x.read_counts() == y.read_counts(),
+        }
+    }
+    fn same_slice(&self, x: &PssState, y: &PssState) -> bool {
+        match self.0 {
+            Blindness::ReadSet => true,
+            Blindness::Tags => PssCoordinates.same_slice(x, y),
+        }
     }
 }

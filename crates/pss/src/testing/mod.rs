@@ -41,7 +41,7 @@ mod on_pss;
 mod roulette;
 mod stripes;
 
-pub use broken::{ClampedKelemen, RegionalGaussian};
+pub use broken::{BlindPssCoordinates, Blindness, ClampedKelemen, RegionalGaussian};
 pub use eager::Eager;
 pub use exact::{
     exact_sampler_test, pss_splat_weight_test, pss_stationarity_test, ExactPssTarget, PssBins,
