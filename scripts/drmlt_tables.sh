@@ -6,10 +6,13 @@
 # MMLT against PSSMLT/K, PSSMLT/G (sigma matched to DR orbital's acceptance; both bases) and
 # MMLT/K. Equal time (128x128, SECONDS per render, SEEDS seeds), then equal mutations (MPP
 # mutations per pixel). One thread per render; each (scene, seed) run of every method is one
-# `--run-one` job, taken under `flock /work/measure.lock` when that file exists, so other
-# measurements interleave; methods run in a fixed order within a seed.
+# `--run-one` job (all methods of one scene and seed, in a fixed order), taken under
+# `flock $LOCK` (default /work/measure.lock when that file exists; LOCK=none for no lock), so
+# other measurements interleave between jobs; PAUSE seconds (default 2) between jobs let a
+# waiting measurement take the lock. To use both cores, run one scene per process, each with
+# its own LOCK and OUT.
 #
-# Usage: [SCENES="a b"] [OUT=dir] scripts/drmlt_tables.sh [SECONDS] [SEEDS] [MPP]
+# Usage: [SCENES="a b"] [OUT=dir] [LOCK=file|none] [PAUSE=s] scripts/drmlt_tables.sh [SECONDS] [SEEDS] [MPP]
 #   defaults: 30 s, 5 seeds, 64 mutations per pixel; scenes cornell-glass glossy-highlight
 #   caustic-pool; OUT target/drmlt-footing.
 # Duration: 14 methods x SECONDS x SEEDS x scenes for equal time (30 s, 5 seeds, 3 scenes:
@@ -29,8 +32,9 @@ mkdir -p "$out"
 # A private copy: a concurrent `cargo build` must not replace the binary mid-measurement.
 bin="$out/drmlt"
 cp target/release/examples/drmlt "$bin"
+lockfile="${LOCK:-/work/measure.lock}"
 lock() {
-    if [ -e /work/measure.lock ]; then flock /work/measure.lock "$@"; else "$@"; fi
+    if [ "$lockfile" != none ] && [ -e "$lockfile" ]; then flock "$lockfile" "$@"; else "$@"; fi
 }
 for regime in "--time $secs" "--spp $mpp"; do
     name=$(echo "$regime" | tr -d ' -')
@@ -41,6 +45,7 @@ for regime in "--time $secs" "--spp $mpp"; do
     for id in $(grep -o '"id":"[^"]*"' "$jobs/jobs/jobs.jsonl" | cut -d'"' -f4); do
         # shellcheck disable=SC2086
         lock "$bin" "${common[@]}" --run-one "$id" $scenes
+        sleep "${PAUSE:-2}"
     done
     # shellcheck disable=SC2086
     "$bin" "${common[@]}" --collect $scenes
