@@ -718,7 +718,7 @@ def scene_thin_highlight():
     s.metal("plate", (0.95, 0.93, 0.88), 0.03)
     s.diffuse("strip", (0.9, 0.9, 0.9))
     s.diffuse("floor", (0.5, 0.5, 0.5))
-    s.diffuse("backdrop", (0.03, 0.03, 0.035))
+    s.diffuse("backdrop", (0.01, 0.01, 0.01))
     s.diffuse("block", (0.2, 0.35, 0.6))
     E = 4.0
     s.mesh("floor", quad((-E, 0, -2.5), (E, 0, -2.5), (E, 0, E), (-E, 0, E), facing=(0, 1, 0)), "floor")
