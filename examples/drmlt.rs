@@ -124,11 +124,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let orbital = MethodSettings::from(DrmltSettings::rioux_lavoie2020()).with_chains(256, 20_000);
     let family = |sigma| gaussian(sigma).with_chains(256, 20_000);
     let bisect = Bisection::log(1e-4, 0.5, 9);
-    let cache = (args.calibration.clone())
-        .unwrap_or_else(|| plan.out.join("pssmlt-g-calibration.json"));
+    let cache =
+        (args.calibration.clone()).unwrap_or_else(|| plan.out.join("pssmlt-g-calibration.json"));
     let (fits, used) = match_acceptance_cached(&cache, &cases, &probe, orbital, family, bisect)?;
     if !used.reused.is_empty() {
-        eprintln!("PSSMLT/G calibration of {:?} read from {}", used.reused, cache.display());
+        eprintln!(
+            "PSSMLT/G calibration of {:?} read from {}",
+            used.reused,
+            cache.display()
+        );
     }
     let sigma = fits.clone();
     let gaussian = move |c: &RunContext| at_depth_5(gaussian(sigma.value(c.scene)));

@@ -240,14 +240,14 @@ mod tests {
             let (a, b) = (&fits.0[0].1, &fresh.0[0].1);
             assert_eq!(a.value.to_bits(), b.value.to_bits());
             assert_eq!(a.achieved.to_bits(), b.achieved.to_bits());
-            assert_eq!((a.target.to_bits(), a.measurements), (b.target.to_bits(), 4));
+            assert_eq!(
+                (a.target.to_bits(), a.measurements),
+                (b.target.to_bits(), 4)
+            );
         }
         // Negative control: other inputs (the probe's seed, the bisection, the scene) are not
         // served the stored fit.
-        let other_seed = RenderSettings {
-            seed: 8,
-            ..probe()
-        };
+        let other_seed = RenderSettings { seed: 8, ..probe() };
         let (_, used) =
             match_acceptance_cached(&path, &cases, &other_seed, pss(0.0), pss, bisect).unwrap();
         assert_eq!(used.fitted, ["cornell-box"], "a stale file was reused");
@@ -277,7 +277,10 @@ mod tests {
         let e = match_acceptance_cached(&path, &cases, &probe(), pss(0.0), pss, bisect)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("calibration.json") && e.contains("something-else"), "{e}");
+        assert!(
+            e.contains("calibration.json") && e.contains("something-else"),
+            "{e}"
+        );
         write_atomic(&path, b"not json").unwrap();
         let e = match_acceptance_cached(&path, &cases, &probe(), pss(0.0), pss, bisect)
             .unwrap_err()

@@ -30,10 +30,10 @@ mod slurm;
 mod status;
 
 pub use emit::{write_sweep_files, DEFAULT_IMAGE};
-pub(crate) use joblist::{read_bounded, write_atomic};
 pub use joblist::{
     is_job_id, Job, Sweep, SweepInfo, JOBS_FILE, MAX_JOBS, SWEEP_FILE, SWEEP_FORMAT,
 };
+pub(crate) use joblist::{read_bounded, write_atomic};
 pub use k8s::{k8s_manifest, write_k8s_manifest, K8sOptions, K8S_FILE};
 pub use mode::{JobMode, RunId};
 pub(crate) use records::Num;
