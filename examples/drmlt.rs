@@ -124,8 +124,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let orbital = MethodSettings::from(DrmltSettings::rioux_lavoie2020()).with_chains(256, 20_000);
     let family = |sigma| gaussian(sigma).with_chains(256, 20_000);
     let bisect = Bisection::log(1e-4, 0.5, 9);
-    let cache =
-        (args.calibration.clone()).unwrap_or_else(|| plan.out.join("pssmlt-g-calibration.json"));
+    let default_cache = plan.out.join("pssmlt-g-calibration.json");
+    let cache = args.calibration.clone().unwrap_or(default_cache);
     let (fits, used) = match_acceptance_cached(&cache, &cases, &probe, orbital, family, bisect)?;
     if !used.reused.is_empty() {
         eprintln!(

@@ -132,7 +132,7 @@ pub fn match_acceptance_cached(
         let found = match_acceptance(
             std::slice::from_ref(case),
             probe,
-            reference.clone(),
+            reference,
             &family,
             bisection,
         )?;
