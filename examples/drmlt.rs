@@ -4,7 +4,8 @@
 //! Methods, paper presets at max depth 5: PSSMLT/K ([`PssmltSettings::kelemen2002`]);
 //! PSSMLT/G, the same with a Gaussian small step whose sigma matches DR orbital's acceptance
 //! on PSSMLT per scene (9 bisections of log sigma in [1e-4, 0.5] at 16 mutations per pixel,
-//! seed 7, 20 000 bootstrap samples); MMLT/K ([`MmltSettings::hachisuka2014`]); DR
+//! seed 7, 20 000 bootstrap samples; fitted once and stored with its inputs in
+//! `--calibration FILE`, default `OUT/pssmlt-g-calibration.json`); MMLT/K ([`MmltSettings::hachisuka2014`]); DR
 //! Tierney-Mira, Green-Mira and orbital on PSSMLT and MMLT
 //! ([`DrmltSettings::rioux_lavoie2020_with`]). In `--out` (default `target/drmlt`):
 //! `results.md` (per scene relMSE and MAD median [min, max] over seeds, samples/s, acceptance,
@@ -21,10 +22,10 @@
 //! is saved; the toy comes last; `--quick`: 16 x 16, 8 mpp, 2 seeds, cornell, cornell-glass.
 //!
 //! `cargo run --release --example drmlt -- [--time 4] [--seeds 5] [--size 64] [--out DIR]
-//! [--no-toy] [--no-scenes] [--stats-only] [--quick] [scene ...]`
+//! [--no-toy] [--no-scenes] [--stats-only] [--quick] [--calibration FILE] [scene ...]`
 
 use clap::Parser;
-use experiments::calibrate::match_acceptance;
+use experiments::match_acceptance_cached;
 use experiments::{Bisection, Column, CommonOptions, Defaults, Experiment, Measure, Method};
 use experiments::{Regime, RunContext, TableSpec, ToyStudy};
 use mcmc_core::delayed_rejection::IndependentSecondStage;
@@ -60,6 +61,12 @@ struct Args {
     /// luminance of `scenes/references/SCENE.exr`), large steps 0.3 without MIS.
     #[arg(long)]
     footing: bool,
+    /// Where PSSMLT/G's calibration is stored with its inputs (default
+    /// `OUT/pssmlt-g-calibration.json`): fitted by the first process that needs it and
+    /// reused by the others (`--emit-jobs`, each `--run-one`, `--collect`); a stored fit on
+    /// other inputs (scene, size, probe, bisection) is refitted.
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<std::path::PathBuf>,
 }
 
 /// `preset` at max depth 5.
@@ -117,7 +124,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let orbital = MethodSettings::from(DrmltSettings::rioux_lavoie2020()).with_chains(256, 20_000);
     let family = |sigma| gaussian(sigma).with_chains(256, 20_000);
     let bisect = Bisection::log(1e-4, 0.5, 9);
-    let fits = match_acceptance(&cases, &probe, orbital, family, bisect)?;
+    let default_cache = plan.out.join("pssmlt-g-calibration.json");
+    let cache = args.calibration.clone().unwrap_or(default_cache);
+    let (fits, used) = match_acceptance_cached(&cache, &cases, &probe, orbital, family, bisect)?;
+    if !used.reused.is_empty() {
+        eprintln!(
+            "PSSMLT/G calibration of {:?} read from {}",
+            used.reused,
+            cache.display()
+        );
+    }
     let sigma = fits.clone();
     let gaussian = move |c: &RunContext| at_depth_5(gaussian(sigma.value(c.scene)));
     let mut methods = vec![

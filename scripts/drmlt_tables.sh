@@ -14,19 +14,21 @@
 #
 # Usage: [SCENES="a b"] [OUT=dir] [LOCK=file|none] [PAUSE=s] scripts/drmlt_tables.sh [SECONDS] [SEEDS] [MPP]
 #   defaults: 30 s, 5 seeds, 64 mutations per pixel; scenes cornell-glass glossy-highlight
-#   caustic-pool; OUT target/drmlt-footing.
-# Duration: 14 methods x SECONDS x SEEDS x scenes for equal time (30 s, 5 seeds, 3 scenes:
-# 105 min), plus the PSSMLT/G calibration, which every process repeats (about 1 min per
-# scene at 128x128: the job list, each run and the collect step), plus the equal-mutation
-# runs (at 64 mpp about 15 min): about 2.5 h of one core in all. The thin glossy highlight
-# scene where PSSMLT/G beats PSSMLT/K is not bundled yet: add it to SCENES when it is.
+#   caustic-pool thin-highlight; OUT target/drmlt-footing.
+# Duration: 14 methods x SECONDS x SEEDS x scenes for equal time (30 s, 5 seeds, 4 scenes:
+# 140 min), plus the PSSMLT/G calibration, fitted once per scene (about 1 min each at
+# 128x128) by the first job-list step and stored with its inputs in
+# OUT/pssmlt-g-calibration.json, which every later process of both regimes reads (a stored
+# fit on other inputs is refitted), plus the equal-mutation runs (at 64 mpp about 20 min).
+# thin-highlight is the scene built for the premise of the paper's Fig. 10 (PSSMLT/G ahead
+# of PSSMLT/K): docs/lab/2026-11-28-thin-highlight-scene.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 secs="${1:-30}"
 seeds="${2:-5}"
 mpp="${3:-64}"
 out="${OUT:-target/drmlt-footing}"
-scenes="${SCENES:-cornell-glass glossy-highlight caustic-pool}"
+scenes="${SCENES:-cornell-glass glossy-highlight caustic-pool thin-highlight}"
 cargo build --release --quiet --example drmlt
 mkdir -p "$out"
 # A private copy: a concurrent `cargo build` must not replace the binary mid-measurement.
@@ -39,7 +41,8 @@ lock() {
 for regime in "--time $secs" "--spp $mpp"; do
     name=$(echo "$regime" | tr -d ' -')
     jobs="$out/$name"
-    common=(--footing --no-toy $regime --seeds "$seeds" --size 128 --threads 1 --out "$jobs")
+    common=(--footing --no-toy $regime --seeds "$seeds" --size 128 --threads 1 --out "$jobs"
+            --calibration "$out/pssmlt-g-calibration.json")
     # shellcheck disable=SC2086
     "$bin" "${common[@]}" --emit-jobs "$jobs/jobs" $scenes
     for id in $(grep -o '"id":"[^"]*"' "$jobs/jobs/jobs.jsonl" | cut -d'"' -f4); do

@@ -708,6 +708,51 @@ def scene_glossy_highlight():
     return s
 
 
+def scene_thin_highlight():
+    s = Scene("thin-highlight", "A thin glossy highlight spanning many pixels, reached only by paths of two or more "
+                                "bounces: a low-roughness metal plate seen at a grazing angle mirrors a long, thin, "
+                                "brightly lit white strip (itself lit by a hidden emitter), over dimly and diffusely "
+                                "lit surroundings (built to show the premise of the DR paper's Fig. 10).")
+    s.emitter("lamp", (600.0, 590.0, 560.0))
+    s.emitter("fill", (0.5, 0.5, 0.5))
+    s.metal("plate", (0.95, 0.93, 0.88), 0.03)
+    s.diffuse("strip", (0.9, 0.9, 0.9))
+    s.diffuse("floor", (0.5, 0.5, 0.5))
+    s.diffuse("backdrop", (0.01, 0.01, 0.01))
+    s.diffuse("block", (0.2, 0.35, 0.6))
+    E = 4.0
+    s.mesh("floor", quad((-E, 0, -2.5), (E, 0, -2.5), (E, 0, E), (-E, 0, E), facing=(0, 1, 0)), "floor")
+    s.mesh("backdrop", quad((-E, 0, -2.5), (E, 0, -2.5), (E, 3, -2.5), (-E, 3, -2.5), facing=(0, 0, 1)), "backdrop")
+    s.mesh("plate", box((0.0, 0.005, 0.2), (1.6, 0.01, 1.4), bottom=False), "plate")
+    s.mesh("block", box((0.55, 0.1 + 0.01, -0.35), (0.2, 0.2, 0.2), rot_deg=-20.0, bottom=True), "block")
+    # the strip: 1.4 m x 2 mm of white diffuse, along x, tilted to face the point of the plate that
+    # mirrors it into the camera; the camera sees it only in the plate (two bounces to a light)
+    eye = (0.0, 0.4, 2.0)
+    sc = (0.0, 0.55, -1.3)
+    mirror_eye = (eye[0], 2 * 0.01 - eye[1], eye[2])
+    tt = (sc[1] - 0.01) / (sc[1] - mirror_eye[1])
+    hit = add(sc, mul(sub(mirror_eye, sc), tt))
+    nrm = normalize(sub(hit, sc))
+    across = normalize(cross(nrm, (1.0, 0.0, 0.0)))
+    hl, hw = 0.7, 0.001
+    corners = [add(sc, add(mul((1.0, 0.0, 0.0), sx * hl), mul(across, sy * hw)))
+               for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    s.mesh("strip", quad(*corners, facing=nrm), "strip")
+    # the lamp: a 1.5 m x 8 cm panel below and in front of the strip, facing up at it, under
+    # the strip-to-plate rays; the camera sees only its back, the plate not its face
+    lc = add(sc, (0.0, -0.25, 0.25))
+    ln = normalize(sub(sc, lc))
+    lacross = normalize(cross(ln, (1.0, 0.0, 0.0)))
+    ll, lw = 0.75, 0.04
+    lcorners = [add(lc, add(mul((1.0, 0.0, 0.0), sx * ll), mul(lacross, sy * lw)))
+                for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    s.mesh("lamp", quad(*lcorners, facing=ln), "lamp")
+    # a dim, large fill panel overhead behind the camera lights the surroundings diffusely
+    s.mesh("fill", quad((-2, 3, 0.5), (2, 3, 0.5), (2, 3, 3.0), (-2, 3, 3.0), facing=(0, -1, 0)), "fill")
+    s.camera(eye, (0.0, 0.08, -0.3), 35.0)
+    return s
+
+
 def scene_glossy_diffuse():
     s = Scene("glossy-diffuse", "Glossy + diffuse mix (the regional-adaptive paper's Necklace situation): a "
                                 "necklace of glossy metal beads and links on a diffuse floor, between coloured "
@@ -838,7 +883,7 @@ def scene_motion_blur():
 
 
 SCENES = [scene_cornell, scene_cornell_glass, scene_caustic_pool, scene_ajar_door, scene_glossy_highlight,
-          scene_glossy_diffuse, scene_dof, scene_motion_blur]
+          scene_glossy_diffuse, scene_dof, scene_motion_blur, scene_thin_highlight]
 
 
 def main():

@@ -73,6 +73,7 @@
 //! ```
 
 pub mod calibrate;
+pub mod calibration_cache;
 mod columns;
 mod compare;
 mod error;
@@ -97,6 +98,7 @@ mod table;
 mod toy_study;
 
 pub use calibrate::{Bisection, Calibrated, Calibrations};
+pub use calibration_cache::{match_acceptance_cached, CacheUse, CalibrationInputs};
 pub use columns::{Column, TableSpec};
 mod temporal;
 #[cfg(test)]

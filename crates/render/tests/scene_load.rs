@@ -319,6 +319,7 @@ fn bundled_scenes_load_with_camera_extras() {
         "glossy-diffuse",
         "dof",
         "motion-blur",
+        "thin-highlight",
     ] {
         let s = Scene::load(&scenes.join(format!("{name}.gltf")))
             .unwrap_or_else(|e| panic!("{name}: {e}"));

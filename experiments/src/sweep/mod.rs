@@ -33,8 +33,10 @@ pub use emit::{write_sweep_files, DEFAULT_IMAGE};
 pub use joblist::{
     is_job_id, Job, Sweep, SweepInfo, JOBS_FILE, MAX_JOBS, SWEEP_FILE, SWEEP_FORMAT,
 };
+pub(crate) use joblist::{read_bounded, write_atomic};
 pub use k8s::{k8s_manifest, write_k8s_manifest, K8sOptions, K8S_FILE};
 pub use mode::{JobMode, RunId};
+pub(crate) use records::Num;
 pub use runner::{run_local, run_task, LocalRun, INDEX_VARIABLES};
 pub use slurm::{slurm_script, SLURM_FILE};
 pub use status::{
