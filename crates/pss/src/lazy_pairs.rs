@@ -171,11 +171,17 @@ impl LazyPairParams {
 
     /// The sum of `first` first-stage steps and `second` composite steps of the pair at `a`,
     /// drawn from `key` (the catch-up of missed accepted steps: translations commute, so only
-    /// the counts matter).
+    /// the counts matter). `log_ratio`: [`LazyPairParams::log_radius_ratio`].
     #[must_use]
-    pub fn missed_steps(&self, key: u64, a: u64, first: u64, second: u64) -> [f64; 2] {
+    pub fn missed_steps(
+        &self,
+        log_ratio: f64,
+        key: u64,
+        a: u64,
+        first: u64,
+        second: u64,
+    ) -> [f64; 2] {
         let mut draws = PairDraws::new(key, a);
-        let log_ratio = self.log_radius_ratio();
         let mut total = [0.0, 0.0];
         for _ in 0..first {
             let d = self.step_displacement_with(log_ratio, &mut draws);

@@ -117,6 +117,9 @@ pub struct PssState {
     /// Per coordinate: the stream's `orbits` when it was last brought up to date (empty, i.e.
     /// all 0, until a lineage takes an orbital step; see [`crate::lazy_pairs`]).
     orbit_stamps: Vec<u64>,
+    /// [`LazyPairParams::log_radius_ratio`] of a pairwise pending mutation (computed once per
+    /// candidate rather than once per pair).
+    pair_log_ratio: f64,
     pending: Pending,
     key: u64,
     /// The key of the state this one was proposed from (to check `absorb_rejected` calls).
@@ -157,6 +160,7 @@ impl Clone for PssState {
         self.last_large = source.last_large;
         self.orbits = source.orbits;
         self.orbit_stamps.clone_from(&source.orbit_stamps);
+        self.pair_log_ratio = source.pair_log_ratio;
         self.pending = source.pending;
         self.key = source.key;
         self.parent_key = source.parent_key;
@@ -239,6 +243,7 @@ impl PssState {
             last_large: [0; MAX_STREAMS],
             orbits: [0; MAX_STREAMS],
             orbit_stamps: Vec::new(),
+            pair_log_ratio: 0.0,
             pending: Pending::None,
             key,
             parent_key: key,
@@ -260,6 +265,7 @@ impl PssState {
         self.last_large = [0; MAX_STREAMS];
         self.orbits = [0; MAX_STREAMS];
         self.orbit_stamps.clear();
+        self.pair_log_ratio = 0.0;
         self.pending = Pending::None;
         self.key = key;
         self.parent_key = key;
@@ -335,6 +341,9 @@ impl PssState {
                     _ => {}
                 }
             }
+        }
+        if let Pending::Pairs(params) | Pending::Orbit { params, .. } = pending {
+            self.pair_log_ratio = params.log_radius_ratio();
         }
         self.pending = pending;
         self.parent_key = self.key;
@@ -573,6 +582,7 @@ impl PssState {
         // moved, which the parent then holds up to date.
         let first_pair = first_pair.filter(|_| pair.iter().all(|&i| self.stamps[i] == parent_now));
         let catch_up_key = mcmc_core::seed::mix64(self.key ^ CATCH_UP_SALT);
+        let log_ratio = self.pair_log_ratio;
         // The parent's pair, each coordinate drawn from its law given the history (logged).
         // The two coordinates of a pair share their stamps, so their missed steps are drawn
         // once (kept with the counts they were drawn for).
@@ -593,7 +603,8 @@ impl PssState {
                 let d = match missed {
                     Some((f, s, d)) if (f, s) == (first, second) => d,
                     _ => {
-                        let d = params.missed_steps(catch_up_key, a as u64, first, second);
+                        let d =
+                            params.missed_steps(log_ratio, catch_up_key, a as u64, first, second);
                         missed = Some((first, second, d));
                         d
                     }
@@ -614,11 +625,12 @@ impl PssState {
                     torus_displacement(parent[0], y[0]),
                     torus_displacement(parent[1], y[1]),
                 ],
-                None => params.step_displacement(&mut PairDraws::new(first_key, a as u64)),
+                None => params
+                    .step_displacement_with(log_ratio, &mut PairDraws::new(first_key, a as u64)),
             };
             params.orbit_displacement(d, params.rotation(&mut PairDraws::new(self.key, a as u64)))
         } else {
-            params.step_displacement(&mut PairDraws::new(self.key, a as u64))
+            params.step_displacement_with(log_ratio, &mut PairDraws::new(self.key, a as u64))
         };
         for (c, &i) in pair.iter().enumerate() {
             if self.stamps[i] != now {
