@@ -16,7 +16,16 @@
 #[inline]
 #[must_use]
 pub fn wrap(x: f64) -> f64 {
-    let w = x - x.floor();
+    // Fast paths (no `floor` call) with the same arithmetic as `x - x.floor()`.
+    let w = if x > 0.0 && x < 1.0 {
+        return x;
+    } else if (1.0..2.0).contains(&x) {
+        x - 1.0
+    } else if (-1.0..0.0).contains(&x) {
+        x - (-1.0)
+    } else {
+        x - x.floor()
+    };
     if w >= 1.0 {
         0.0
     } else {
@@ -37,7 +46,16 @@ pub fn wrap(x: f64) -> f64 {
 #[must_use]
 pub fn displacement(from: f64, to: f64) -> f64 {
     let d = to - from;
-    d - d.round()
+    // Fast paths (no `round` call) with the same arithmetic as `d - d.round()`.
+    if d.abs() < 0.5 {
+        d
+    } else if (0.5..1.5).contains(&d) {
+        d - 1.0
+    } else if d <= -0.5 && d > -1.5 {
+        d - (-1.0)
+    } else {
+        d - d.round()
+    }
 }
 
 /// Number of periodic images [`wrapped_normal_pdf`] sums on each side (`m = -3..=3`). With

@@ -31,15 +31,20 @@
 //! pair `y` read when it proposes `z` (the cost of what `y` read), and lazily elsewhere.
 //!
 //! Random numbers: one key per candidate from the chain's RNG; the pair of stream `s`
-//! starting at interleaved index `a` draws its radius, direction and rotation uniforms from
-//! `(key, a, 0..3)` ([`crate::noise`]), so `z` recomputes `y`'s `d` from `y`'s key.
+//! starting at interleaved index `a` draws its radius, direction and rotation from the
+//! sequence [`PairDraws`]`(key, a)`, so `z` can recompute `y`'s `d` from `y`'s key where `y`
+//! did not read the pair (where it did, `d` is `y`'s pair minus `x`'s). A catch-up draws the
+//! missed steps by their law: `m1` first-stage steps, then `m2` composite steps each drawn
+//! as a length and a direction ([`LazyPairParams::composite_step`]). No trigonometry: the
+//! directions are normalised points of the disc, the wrapped Cauchy rotation comes from
+//! another such point ([`WrappedCauchy::rotation_of_point`]).
 
 use mcmc_core::delayed_rejection::{Group, OrbitalWalk, WrappedCauchy};
 use mcmc_core::proposal::ConditionalProposal;
+use mcmc_core::seed::mix64;
 use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
-use crate::noise::uniform;
 use crate::pairwise::{torus_displacement, PairwiseKelemenParams};
 use crate::state::{Pending, PssState};
 
@@ -96,40 +101,95 @@ impl LazyPairParams {
         self
     }
 
-    /// The first-stage displacement of the pair at `a` drawn from `key`: `r (cos phi,
-    /// sin phi)`, `r` log-uniform (eq. 9, from draw `draw`), the direction uniform on the
-    /// circle ([`uniform_direction`], from draw `draw + 1`).
+    /// The first-stage displacement of a pair drawn from `draws`: `r (cos phi, sin phi)`, `r`
+    /// log-uniform (eq. 9), the direction uniform on the circle ([`PairDraws::direction`]).
     #[inline]
     #[must_use]
-    pub fn step_displacement(&self, key: u64, a: u64, draw: u64) -> [f64; 2] {
-        let r = self.step.radius(uniform(key, a, draw));
-        let [cos, sin] = uniform_direction(key, a, draw + 1);
+    pub fn step_displacement(&self, draws: &mut PairDraws) -> [f64; 2] {
+        self.step_displacement_with(self.log_radius_ratio(), draws)
+    }
+
+    /// `ln(r_max / r_min)` of the first stage's radii (computed once per pair, not per draw).
+    #[inline]
+    #[must_use]
+    pub fn log_radius_ratio(&self) -> f64 {
+        (self.step.r_max / self.step.r_min).ln()
+    }
+
+    /// The radius `r_max exp(-u ln(r_max / r_min))` of eq. 9 ([`PairwiseKelemenParams::radius`])
+    /// given `log_ratio` = [`LazyPairParams::log_radius_ratio`].
+    #[inline]
+    fn radius_with(&self, log_ratio: f64, u: f64) -> f64 {
+        self.step.r_max * (-u * log_ratio).exp()
+    }
+
+    /// [`LazyPairParams::step_displacement`] given [`LazyPairParams::log_radius_ratio`].
+    #[inline]
+    #[must_use]
+    pub fn step_displacement_with(&self, log_ratio: f64, draws: &mut PairDraws) -> [f64; 2] {
+        let r = self.radius_with(log_ratio, draws.uniform());
+        let [cos, sin] = draws.direction();
         [r * cos, r * sin]
     }
 
-    /// The move `d - R(theta) d` of a pair on its orbit (eq. 10), `theta` from `u`.
+    /// The rotation `R(theta)` of the orbital stage (eq. 10) drawn from `draws`, as
+    /// `(cos theta, sin theta)` ([`WrappedCauchy::rotation_of_point`] of a uniform point of
+    /// the disc: no trigonometry).
     #[inline]
     #[must_use]
-    pub fn orbit_displacement(&self, d: [f64; 2], u: f64) -> [f64; 2] {
-        let (cos, sin) = self.angle.rotation(u);
+    pub fn rotation(&self, draws: &mut PairDraws) -> (f64, f64) {
+        let [x, y, _] = draws.disc_point();
+        self.angle.rotation_of_point(x, y)
+    }
+
+    /// The move `d - R(theta) d` of a pair on its orbit (eq. 10), `R(theta)` given as
+    /// `(cos theta, sin theta)`.
+    #[inline]
+    #[must_use]
+    pub fn orbit_displacement(&self, d: [f64; 2], (cos, sin): (f64, f64)) -> [f64; 2] {
         [
             d[0] - (cos * d[0] - sin * d[1]),
             d[1] - (sin * d[0] + cos * d[1]),
         ]
     }
 
-    /// The sum of `first` first-stage steps and `second` composite steps drawn from `key`
-    /// for the pair at `a` (the catch-up of missed accepted steps: translations commute).
+    /// One composite step `d - R(theta) d` with `d` a first-stage step, drawn by its law
+    /// rather than by its parts: for `d = r e^(i phi)`, `d - R(theta) d = r (1 - e^(i theta))
+    /// e^(i phi)` has length `2 r |sin(theta / 2)|` and, `phi` being uniform and independent
+    /// of `r` and `theta`, a uniform direction independent of its length. So: a radius, a
+    /// half-angle sine ([`WrappedCauchy::half_angle_sine_of_point`]) and a direction.
+    /// `log_ratio`: [`LazyPairParams::log_radius_ratio`].
+    #[inline]
     #[must_use]
-    pub fn missed_steps(&self, key: u64, a: u64, first: u64, second: u64) -> [f64; 2] {
+    pub fn composite_step(&self, log_ratio: f64, draws: &mut PairDraws) -> [f64; 2] {
+        let r = self.radius_with(log_ratio, draws.uniform());
+        let [x, y, _] = draws.disc_point();
+        let length = 2.0 * r * self.angle.half_angle_sine_of_point(x, y);
+        let [cos, sin] = draws.direction();
+        [length * cos, length * sin]
+    }
+
+    /// The sum of `first` first-stage steps and `second` composite steps of the pair at `a`,
+    /// drawn from `key` (the catch-up of missed accepted steps: translations commute, so only
+    /// the counts matter). `log_ratio`: [`LazyPairParams::log_radius_ratio`].
+    #[must_use]
+    pub fn missed_steps(
+        &self,
+        log_ratio: f64,
+        key: u64,
+        a: u64,
+        first: u64,
+        second: u64,
+    ) -> [f64; 2] {
+        let mut draws = PairDraws::new(key, a);
         let mut total = [0.0, 0.0];
-        for j in 0..first + second {
-            let d = self.step_displacement(key, a, 3 * j);
-            let d = if j < first {
-                d
-            } else {
-                self.orbit_displacement(d, uniform(key, a, 3 * j + 2))
-            };
+        for _ in 0..first {
+            let d = self.step_displacement_with(log_ratio, &mut draws);
+            total[0] += d[0];
+            total[1] += d[1];
+        }
+        for _ in 0..second {
+            let d = self.composite_step(log_ratio, &mut draws);
             total[0] += d[0];
             total[1] += d[1];
         }
@@ -137,54 +197,75 @@ impl LazyPairParams {
     }
 }
 
-/// Salt of the direction draws (see [`uniform_direction`]).
-const DIRECTION_SALT: u64 = 0x6469_7265_6374_696f;
-
-/// Tries of the direction's rejection sampler before its fallback.
-const DIRECTION_TRIES: u64 = 32;
-
-/// A direction uniform on the unit circle for the pair at `a`, draw `draw` of `key`: the
-/// first point of the square `[-1, 1)^2` inside the unit disc (and off a tiny disc around 0),
-/// normalised, from the counter-based uniforms of a key derived from `key` (points `2t`,
-/// `2t + 1` of the sub-stream `draw`); about 1.27 points on average and no trigonometry.
-/// Exactly uniform: the accepted point is uniform on the annulus, whose direction is
-/// uniform; after 32 rejected points (probability below `1e-21`) the angle
-/// `2 pi u` of a further uniform, uniform too.
-#[inline]
-#[must_use]
-pub fn uniform_direction(key: u64, a: u64, draw: u64) -> [f64; 2] {
-    let key = mcmc_core::seed::mix64(key ^ DIRECTION_SALT);
-    let base = draw.wrapping_mul(2 * DIRECTION_TRIES + 1);
-    // The first point, inline (accepted with probability pi / 4); the rest out of line, so
-    // that the common case computes two uniforms only.
-    direction_try(key, a, base).unwrap_or_else(|| direction_retry(key, a, base))
+/// The random numbers of one pair of one candidate: a sequence of uniforms that is a pure
+/// function of `(key, a)` (the candidate's noise key and the pair's first interleaved index),
+/// drawn in order (SplitMix64 from a hashed start: one hash per uniform, where
+/// [`crate::noise::uniform`] costs three). Different keys or pairs give independent
+/// sequences, and the result does not depend on the order in which pairs are read.
+#[derive(Clone, Copy, Debug)]
+pub struct PairDraws {
+    state: u64,
 }
 
-/// Point `t` of [`uniform_direction`]'s rejection sampler at draw `base + 2 t`, normalised if
-/// it lies in the disc.
-#[inline]
-fn direction_try(key: u64, a: u64, draw: u64) -> Option<[f64; 2]> {
-    let x = 2.0 * uniform(key, a, draw) - 1.0;
-    let y = 2.0 * uniform(key, a, draw + 1) - 1.0;
-    let q = x * x + y * y;
-    (q <= 1.0 && q > 1e-12).then(|| {
-        let inv = 1.0 / q.sqrt();
-        [x * inv, y * inv]
-    })
-}
+/// The SplitMix64 increment (odd: the counter visits every value).
+const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
 
-/// The points after the first of [`uniform_direction`], then its fallback.
-#[cold]
-#[inline(never)]
-fn direction_retry(key: u64, a: u64, base: u64) -> [f64; 2] {
-    for t in 1..DIRECTION_TRIES {
-        if let Some(d) = direction_try(key, a, base + 2 * t) {
-            return d;
+/// Salt of the pair sequences.
+const PAIR_SALT: u64 = 0x7061_6972_2d64_7277;
+
+/// Tries of the disc point's rejection sampler before its fallback.
+const DISC_TRIES: u32 = 32;
+
+impl PairDraws {
+    /// The sequence of the pair at `a` for the noise key `key`.
+    #[inline]
+    #[must_use]
+    pub fn new(key: u64, a: u64) -> Self {
+        Self {
+            state: mix64(key ^ mix64(a.wrapping_mul(GOLDEN) ^ PAIR_SALT)),
         }
     }
-    let (sin, cos) =
-        (std::f64::consts::TAU * uniform(key, a, base + 2 * DIRECTION_TRIES)).sin_cos();
-    [cos, sin]
+
+    /// The next uniform in `[0, 1)` (53 random bits).
+    #[inline]
+    pub fn uniform(&mut self) -> f64 {
+        self.state = self.state.wrapping_add(GOLDEN);
+        (mix64(self.state) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// A point `[x, y, x^2 + y^2]` uniform on the unit disc minus a tiny disc around 0 (the
+    /// first point of the square `[-1, 1)^2` inside it; about 1.27 points on average), so
+    /// its angle is uniform on the circle. After 32 rejected points (probability below
+    /// `1e-21`) the unit point at angle `2 pi u` of a further uniform: its angle is uniform
+    /// too, which is all the callers use.
+    #[inline]
+    pub fn disc_point(&mut self) -> [f64; 3] {
+        for _ in 0..DISC_TRIES {
+            let x = 2.0 * self.uniform() - 1.0;
+            let y = 2.0 * self.uniform() - 1.0;
+            let q = x * x + y * y;
+            if q <= 1.0 && q > 1e-12 {
+                return [x, y, q];
+            }
+        }
+        self.disc_fallback()
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn disc_fallback(&mut self) -> [f64; 3] {
+        let (sin, cos) = (std::f64::consts::TAU * self.uniform()).sin_cos();
+        [cos, sin, 1.0]
+    }
+
+    /// A direction uniform on the unit circle: a [`PairDraws::disc_point`], normalised (no
+    /// trigonometry).
+    #[inline]
+    pub fn direction(&mut self) -> [f64; 2] {
+        let [x, y, q] = self.disc_point();
+        let inv = 1.0 / q.sqrt();
+        [x * inv, y * inv]
+    }
 }
 
 impl Default for LazyPairParams {
@@ -332,7 +413,7 @@ mod tests {
         let n = 200_000;
         let mut bins = [0u32; 20];
         for i in 0..n {
-            let [c, s] = uniform_direction(i, 3, 1);
+            let [c, s] = PairDraws::new(i, 3).direction();
             assert!((c * c + s * s - 1.0).abs() < 1e-12);
             let t = (s.atan2(c) + PI) / (2.0 * PI);
             bins[((t * 20.0) as usize).min(19)] += 1;
@@ -340,6 +421,15 @@ mod tests {
         // Each bin has mean 10 000 and sd ~98: 6 sd bound.
         for b in bins {
             assert!((i64::from(b) - 10_000).abs() < 600, "{bins:?}");
+        }
+    }
+
+    #[test]
+    fn radius_with_a_precomputed_ratio_is_the_stage_radius() {
+        let p = LazyPairParams::default();
+        let ratio = p.log_radius_ratio();
+        for u in [0.0, 0.1, 0.5, 0.9, 0.999] {
+            assert!((p.radius_with(ratio, u) - p.step.radius(u)).abs() < 1e-18);
         }
     }
 

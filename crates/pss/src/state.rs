@@ -1,8 +1,9 @@
 //! The primary-sample-space state: a lazily grown vector of primary samples in [0, 1).
 
-use crate::lazy_pairs::LazyPairParams;
+use crate::lazy_pairs::{LazyPairParams, PairDraws};
 use crate::mutation::SmallMutation;
 use crate::noise::uniform;
+use crate::pairwise::torus_displacement;
 
 /// Maximum number of streams (camera, light, connection, and one spare).
 pub const MAX_STREAMS: usize = 4;
@@ -116,6 +117,9 @@ pub struct PssState {
     /// Per coordinate: the stream's `orbits` when it was last brought up to date (empty, i.e.
     /// all 0, until a lineage takes an orbital step; see [`crate::lazy_pairs`]).
     orbit_stamps: Vec<u64>,
+    /// [`LazyPairParams::log_radius_ratio`] of a pairwise pending mutation (computed once per
+    /// candidate rather than once per pair).
+    pair_log_ratio: f64,
     pending: Pending,
     key: u64,
     /// The key of the state this one was proposed from (to check `absorb_rejected` calls).
@@ -156,6 +160,7 @@ impl Clone for PssState {
         self.last_large = source.last_large;
         self.orbits = source.orbits;
         self.orbit_stamps.clone_from(&source.orbit_stamps);
+        self.pair_log_ratio = source.pair_log_ratio;
         self.pending = source.pending;
         self.key = source.key;
         self.parent_key = source.parent_key;
@@ -238,6 +243,7 @@ impl PssState {
             last_large: [0; MAX_STREAMS],
             orbits: [0; MAX_STREAMS],
             orbit_stamps: Vec::new(),
+            pair_log_ratio: 0.0,
             pending: Pending::None,
             key,
             parent_key: key,
@@ -259,6 +265,7 @@ impl PssState {
         self.last_large = [0; MAX_STREAMS];
         self.orbits = [0; MAX_STREAMS];
         self.orbit_stamps.clear();
+        self.pair_log_ratio = 0.0;
         self.pending = Pending::None;
         self.key = key;
         self.parent_key = key;
@@ -334,6 +341,9 @@ impl PssState {
                     _ => {}
                 }
             }
+        }
+        if let Pending::Pairs(params) | Pending::Orbit { params, .. } = pending {
+            self.pair_log_ratio = params.log_radius_ratio();
         }
         self.pending = pending;
         self.parent_key = self.key;
@@ -500,7 +510,12 @@ impl PssState {
             self.values.resize(index + 1, 0.0);
             self.stamps.resize(index + 1, NEVER);
         }
-        let stream = index % self.streams;
+        self.store_stored(index, index % self.streams, value);
+    }
+
+    /// [`PssState::store`] for a stored coordinate `index` of stream `stream`.
+    #[inline]
+    fn store_stored(&mut self, index: usize, stream: usize, value: f64) {
         self.values[index] = value;
         self.stamps[index] = self.iteration[stream];
         if self.orbits[stream] != 0 || index < self.orbit_stamps.len() {
@@ -521,6 +536,14 @@ impl PssState {
     /// exact); returns coordinate `index`.
     #[cold]
     fn catch_up_pair(&mut self, index: usize) -> f64 {
+        self.catch_up_pair_given(index, None)
+    }
+
+    /// [`PssState::catch_up_pair`], given under a [`Pending::Orbit`] the rejected first-stage
+    /// candidate's values of the pair if it read the pair (`first_pair`; its parent, this
+    /// state's parent, then holds the pair up to date: `absorb_rejected` stored what the
+    /// candidate drew).
+    fn catch_up_pair_given(&mut self, index: usize, first_pair: Option<[f64; 2]>) -> f64 {
         let streams = self.streams;
         let stream = index % streams;
         let (params, moved) = match self.pending {
@@ -555,9 +578,16 @@ impl PssState {
         }
         let orbit_step = moved && matches!(self.pending, Pending::Orbit { .. });
         let parent_orbits = self.orbits[stream] - u64::from(orbit_step);
+        // The rejected candidate's pair gives its move only against the parent's pair it
+        // moved, which the parent then holds up to date.
+        let first_pair = first_pair.filter(|_| pair.iter().all(|&i| self.stamps[i] == parent_now));
         let catch_up_key = mcmc_core::seed::mix64(self.key ^ CATCH_UP_SALT);
+        let log_ratio = self.pair_log_ratio;
         // The parent's pair, each coordinate drawn from its law given the history (logged).
+        // The two coordinates of a pair share their stamps, so their missed steps are drawn
+        // once (kept with the counts they were drawn for).
         let mut parent = [0.0; 2];
+        let mut missed: Option<(u64, u64, [f64; 2])> = None;
         for (c, &i) in pair.iter().enumerate() {
             let stamp = self.stamps[i];
             if stamp == now {
@@ -570,7 +600,15 @@ impl PssState {
             } else {
                 let second = parent_orbits - self.orbit_stamp(i);
                 let first = (parent_now - stamp).saturating_sub(second);
-                let d = params.missed_steps(catch_up_key, a as u64, first, second);
+                let d = match missed {
+                    Some((f, s, d)) if (f, s) == (first, second) => d,
+                    _ => {
+                        let d =
+                            params.missed_steps(log_ratio, catch_up_key, a as u64, first, second);
+                        missed = Some((first, second, d));
+                        d
+                    }
+                };
                 crate::mutation::wrap(self.values[i] + d[c])
             };
             if stamp != parent_now {
@@ -580,14 +618,23 @@ impl PssState {
         let d = if !moved {
             [0.0, 0.0]
         } else if let Pending::Orbit { first_key, .. } = self.pending {
-            let d = params.step_displacement(first_key, a as u64, 0);
-            params.orbit_displacement(d, uniform(self.key, a as u64, 2))
+            // The rejected candidate's move: its pair minus the parent's where it read the
+            // pair (the same `d` to rounding, without redrawing it), else redrawn.
+            let d = match first_pair {
+                Some(y) => [
+                    torus_displacement(parent[0], y[0]),
+                    torus_displacement(parent[1], y[1]),
+                ],
+                None => params
+                    .step_displacement_with(log_ratio, &mut PairDraws::new(first_key, a as u64)),
+            };
+            params.orbit_displacement(d, params.rotation(&mut PairDraws::new(self.key, a as u64)))
         } else {
-            params.step_displacement(self.key, a as u64, 0)
+            params.step_displacement_with(log_ratio, &mut PairDraws::new(self.key, a as u64))
         };
         for (c, &i) in pair.iter().enumerate() {
             if self.stamps[i] != now {
-                self.store(i, crate::mutation::wrap(parent[c] + d[c]));
+                self.store_stored(i, stream, crate::mutation::wrap(parent[c] + d[c]));
             }
         }
         self.values[index]
@@ -600,11 +647,34 @@ impl PssState {
         if other.streams != self.streams {
             return;
         }
-        for i in 0..other.values.len() {
-            let stream = i % self.streams;
-            if stream_mask & (1 << stream) != 0 && other.stamps[i] == other.iteration[stream] {
-                self.get(i);
+        let streams = self.streams;
+        let pairs = matches!(self.pending, Pending::Orbit { .. });
+        for stream in (0..streams).filter(|s| stream_mask & (1 << s) != 0) {
+            let now = other.iteration[stream];
+            for i in (stream..other.values.len()).step_by(streams) {
+                if other.stamps[i] != now || self.stamps.get(i) == Some(&self.iteration[stream]) {
+                    continue;
+                }
+                match self.params_pair(i).filter(|_| pairs) {
+                    Some([a, b]) if b < other.values.len() && other.stamps[b] == now => {
+                        let first = Some([other.values[a], other.values[b]]);
+                        self.catch_up_pair_given(i, first);
+                    }
+                    _ => {
+                        self.get(i);
+                    }
+                }
             }
+        }
+    }
+
+    /// The pair holding coordinate `index` under a pairwise pending mutation.
+    fn params_pair(&self, index: usize) -> Option<[usize; 2]> {
+        match self.pending {
+            Pending::Pairs(params) | Pending::Orbit { params, .. } => {
+                params.pair_of(index, self.streams)
+            }
+            _ => None,
         }
     }
 

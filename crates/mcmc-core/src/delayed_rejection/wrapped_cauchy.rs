@@ -131,6 +131,37 @@ impl WrappedCauchy {
         ((1.0 - t2) * inv, 2.0 * tau * inv)
     }
 
+    /// `(cos theta, sin theta)` with `tan(theta / 2) = tan(phi) / k`, `phi` the angle of the
+    /// point `(x, y)` (not the origin): [`WrappedCauchy::rotation`] with the angle
+    /// `pi (u - 1/2)` replaced by `phi`. A point whose angle is uniform on the circle (a
+    /// uniform point of a disc) gives the law of eq. 10, since `tan(phi)` is then standard
+    /// Cauchy like `tan(pi (u - 1/2))`; no trigonometry: with `t = y / k`,
+    /// `cos theta = (x^2 - t^2) / (x^2 + t^2)`, `sin theta = 2 x t / (x^2 + t^2)`.
+    #[inline]
+    #[must_use]
+    pub fn rotation_of_point(&self, x: f64, y: f64) -> (f64, f64) {
+        let t = self.inverse_k * y;
+        let norm = x * x + t * t;
+        if norm.is_nan() || norm <= 0.0 {
+            return (1.0, 0.0);
+        }
+        let inv = 1.0 / norm;
+        ((x * x - t * t) * inv, 2.0 * x * t * inv)
+    }
+
+    /// `|sin(theta / 2)|` of [`WrappedCauchy::rotation_of_point`]`(x, y)`, `|t| / sqrt(x^2 +
+    /// t^2)`: half the length of `d - R(theta) d` for a unit `d`.
+    #[inline]
+    #[must_use]
+    pub fn half_angle_sine_of_point(&self, x: f64, y: f64) -> f64 {
+        let t = self.inverse_k * y;
+        let norm = x * x + t * t;
+        if norm.is_nan() || norm <= 0.0 {
+            return 0.0;
+        }
+        t.abs() / norm.sqrt()
+    }
+
     /// One rotation ([`WrappedCauchy::rotation`]) from one uniform of `rng`.
     #[inline]
     pub fn sample_rotation<R: Rng + ?Sized>(&self, rng: &mut R) -> (f64, f64) {
@@ -225,6 +256,32 @@ mod tests {
         }
         let uniform = WrappedCauchy::new(0.0).unwrap();
         assert!((uniform.quantile(0.75) - PI / 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rotation_of_a_point_is_the_rotation_of_its_angle() {
+        for rho in [0.0, 0.5, RIOUX_LAVOIE2020_RHO, 0.99] {
+            let wc = WrappedCauchy::new(rho).unwrap();
+            for i in 1..1000 {
+                // The angle phi = pi (u - 1/2) in (-pi/2, pi/2), at radii 0.3 and 1, and the
+                // opposite point (angle phi + pi, the same tangent).
+                let u = i as f64 / 1000.0;
+                let phi = PI * (u - 0.5);
+                let (c, s) = wc.rotation(u);
+                for (x, y) in [(phi.cos(), phi.sin()), (-0.3 * phi.cos(), -0.3 * phi.sin())] {
+                    let (pc, ps) = wc.rotation_of_point(x, y);
+                    assert!(
+                        (pc - c).abs() < 1e-12 && (ps - s).abs() < 1e-12,
+                        "rho {rho} u {u}"
+                    );
+                    let half = wc.half_angle_sine_of_point(x, y);
+                    assert!(
+                        (half - (0.5 * (1.0 - c)).sqrt()).abs() < 1e-12,
+                        "rho {rho} u {u}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
