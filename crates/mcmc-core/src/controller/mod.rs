@@ -23,6 +23,7 @@ pub use shared::{Both, SharedController};
 /// The tunable interfaces, re-exported from [`crate::tunable`] where they live.
 pub use crate::tunable::{
     HasSharedScales, LargeStepTunable, RegionalTunable, ScaleTunable, SharedRegionalScales,
+    StateMove,
 };
 
 use crate::kernel::StepInfo;
