@@ -376,7 +376,8 @@ impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
 
 impl<P: Partition<Path>> ScaleSource for SharedSigmas<P> {
     fn sigmas(&self, x: &Path) -> [f64; 2] {
-        self.sigmas.sigmas_of_region(self.sigmas.partition.region(x))
+        self.sigmas
+            .sigmas_of_region(self.sigmas.partition.region(x))
     }
 
     /// The tracked region of the current state if known; otherwise looked up (and recorded
