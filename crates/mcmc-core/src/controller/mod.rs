@@ -3,6 +3,7 @@
 
 mod global_scale;
 mod large_step;
+mod region_table;
 mod regional_params;
 mod regional_pool;
 mod regional_scale;

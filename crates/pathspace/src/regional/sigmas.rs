@@ -362,7 +362,10 @@ impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
         }
     }
     fn end_step(&self, moved: StateMove) {
-        let candidate = self.candidate.swap(UNKNOWN, Ordering::Relaxed);
+        let candidate = self.candidate.load(Ordering::Relaxed);
+        if candidate != UNKNOWN {
+            self.candidate.store(UNKNOWN, Ordering::Relaxed);
+        }
         if self.current.load(Ordering::Relaxed) == NOT_TRACKING {
             return;
         }
