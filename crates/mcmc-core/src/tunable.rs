@@ -96,6 +96,10 @@ pub trait SharedRegionalScales: Clone {
     fn end_step(&self, moved: StateMove) {
         let _ = moved;
     }
+    /// Called on every chain's handle after every synchronisation point, once the chain has
+    /// received the scales: the scales may have changed, so a tracking handle forgets any
+    /// scale it kept for the current state (its region stays valid).
+    fn scales_published(&self) {}
 }
 
 /// How a step changed the chain's current state, for [`SharedRegionalScales::end_step`].

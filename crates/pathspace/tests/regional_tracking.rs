@@ -1,6 +1,6 @@
-//! The region a `SharedSigmas` handle tracks for its chain's current state (reused from the
-//! accepted candidate's lookup instead of looked up again every step) is the current state's
-//! region after every step of a regional-adaptive chain, for the lens and the multi-chain
+//! The region (and scale) a `SharedSigmas` handle tracks for its chain's current state (reused
+//! from the accepted candidate's lookup instead of looked up again every step) is the current
+//! state's after every step of a regional-adaptive chain, for the lens and the multi-chain
 //! perturbation, with and without refinement; a controller that does not report the steps'
 //! moves to the handle leaves it holding stale regions (negative control).
 
@@ -15,7 +15,8 @@ use pathspace::regional::{
 };
 use pathspace::{
     ra_mixture, BidirectionalMutation, BidirectionalParams, Path, PathMutation, PathTarget,
-    PerturbOrGlobal, Perturbation, PerturbationKind, UnidirectionalParams, UnidirectionalSampler,
+    PerturbOrGlobal, Perturbation, PerturbationKind, ScaleSource, UnidirectionalParams,
+    UnidirectionalSampler,
 };
 
 type Part<'a> = PathPartition<&'a AnalyticScene>;
@@ -121,9 +122,12 @@ fn run<C: Controller<Kernel, Path>>(
             let now = part.region(chain.state());
             moved += usize::from(now != before);
             before = now;
-            if let Some(r) = chain.kernel().shared_sigmas().unwrap().current_region() {
+            let handle = chain.kernel().shared_sigmas().unwrap();
+            if let Some(r) = handle.current_region() {
                 known += 1;
-                wrong += usize::from(r != now);
+                // The kept scale too (no synchronisation point here: the scales are fixed).
+                let kept = handle.current_sigmas(chain.state());
+                wrong += usize::from(r != now || kept != handle.sigmas(chain.state()));
             }
         }
     }

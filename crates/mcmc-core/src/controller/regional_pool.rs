@@ -133,30 +133,33 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
             return;
         }
         let every_l = params.update_rule == RegionalUpdateRule::EveryLVisits;
+        let updates_every = self.updates_every;
         for v in visits {
             let k = v.region as usize;
-            let Some(state) = self.regions.get_mut(k) else {
-                debug_assert!(false, "visit to region {k} of {}", self.regions.len());
-                continue;
-            };
-            state.visits_since_refine += 1;
-            if !v.perturbed {
-                continue;
-            }
-            state.note_proposal(v.accept);
-            if every_l {
-                let lambda = sigmas.log_scale_of(k);
-                if let Some(new) = state.adapt.record(v.accept, lambda, &params.adapt) {
-                    if new != lambda {
-                        sigmas.set_log_scale_of(k, new);
+            let due = self.regions.update(k, |state| {
+                state.visits_since_refine += 1;
+                if !v.perturbed {
+                    return false;
+                }
+                state.note_proposal(v.accept);
+                if every_l {
+                    let lambda = sigmas.log_scale_of(k);
+                    if let Some(new) = state.adapt.record(v.accept, lambda, &params.adapt) {
+                        if new != lambda {
+                            sigmas.set_log_scale_of(k, new);
+                        }
                     }
+                    false
+                } else {
+                    state.adapt.visits += 1;
+                    state.adapt.accepted += v.accept;
+                    state.adapt.visits == updates_every
                 }
-            } else {
-                state.adapt.visits += 1;
-                state.adapt.accepted += v.accept;
-                if state.adapt.visits == self.updates_every {
-                    self.due.push(v.region);
-                }
+            });
+            match due {
+                Some(true) => self.due.push(v.region),
+                Some(false) => {}
+                None => debug_assert!(false, "visit to region {k} of {}", self.regions.len()),
             }
         }
     }
@@ -175,23 +178,22 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         // Regions are independent: the order of `due` does not matter.
         for &k in &self.due {
             let k = k as usize;
-            let Some(state) = self.regions.get_mut(k) else {
-                continue;
-            };
-            let a = &mut state.adapt;
-            let rate = a.accepted / a.visits as f64;
-            let sign = if rate > p.target_acceptance {
-                1.0
-            } else if rate < p.target_acceptance {
-                -1.0
-            } else {
-                0.0
-            };
-            let lambda = (sigmas.log_scale_of(k) + p.gamma(a.updates) * sign).max(p.lambda_min);
-            sigmas.set_log_scale_of(k, lambda);
-            a.visits = 0;
-            a.accepted = 0.0;
-            a.updates += 1;
+            self.regions.update(k, |state| {
+                let a = &mut state.adapt;
+                let rate = a.accepted / a.visits as f64;
+                let sign = if rate > p.target_acceptance {
+                    1.0
+                } else if rate < p.target_acceptance {
+                    -1.0
+                } else {
+                    0.0
+                };
+                let lambda = (sigmas.log_scale_of(k) + p.gamma(a.updates) * sign).max(p.lambda_min);
+                sigmas.set_log_scale_of(k, lambda);
+                a.visits = 0;
+                a.accepted = 0.0;
+                a.updates += 1;
+            });
         }
         self.due.clear();
     }
@@ -248,9 +250,7 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
             }
             self.splits += 1;
         }
-        for r in self.regions.stored_mut() {
-            r.visits_since_refine = 0;
-        }
+        self.regions.clear_refinement_visits();
         self.refinements += 1;
         while self.next_refine <= self.mutations {
             self.next_refine += params.refine_every;

@@ -244,10 +244,13 @@ impl RegionalScale {
         scales: Option<&mut Sc>,
         pooled: &PooledRegionalScales<Sc>,
     ) {
-        if let (Some(s), Some(mine)) = (pooled.sigmas(), scales) {
-            if !mine.same_as(s) {
-                *mine = s.clone();
+        if let Some(mine) = scales {
+            if let Some(s) = pooled.sigmas() {
+                if !mine.same_as(s) {
+                    *mine = s.clone();
+                }
             }
+            mine.scales_published();
         }
         self.frozen = pooled.is_frozen();
     }

@@ -264,7 +264,10 @@ impl<P: Partition<Path>> ScaleSource for RegionalSigmas<P> {
 /// controller ([`SharedRegionalScales::track_current_region`]): the perturbation looks up the
 /// region of every candidate for the reverse density anyway (eq. 2-3), and once the candidate
 /// is accepted that is the current state's region, so the next steps need no lookup of their
-/// own. The record is the handle's own, never shared, and a clone does not track.
+/// own. With the region it keeps the region's `sigma_1` as read in this round (the scales
+/// change only at synchronisation points, after which the controller calls
+/// [`SharedRegionalScales::scales_published`]), so a step reads the shared scales only for
+/// its candidate. The record is the handle's own, never shared, and a clone does not track.
 #[derive(Debug)]
 pub struct SharedSigmas<P> {
     sigmas: Arc<RegionalSigmas<P>>,
@@ -272,12 +275,19 @@ pub struct SharedSigmas<P> {
     current: AtomicU64,
     /// `UNKNOWN`, or the region of this step's candidate.
     candidate: AtomicU64,
+    /// `sigma_1` of `current` read since the last synchronisation point (`f64` bits), or
+    /// `NO_SIGMA`.
+    current_sigma: AtomicU64,
+    /// `sigma_1` of `candidate` (`f64` bits), valid while `candidate` is.
+    candidate_sigma: AtomicU64,
 }
 
 /// [`SharedSigmas::current`]: not tracking.
 const NOT_TRACKING: u64 = u64::MAX;
 /// [`SharedSigmas::current`], [`SharedSigmas::candidate`]: tracking, region not known.
 const UNKNOWN: u64 = u64::MAX - 1;
+/// [`SharedSigmas::current_sigma`]: not read yet (a NaN pattern no scale has).
+const NO_SIGMA: u64 = u64::MAX;
 
 impl<P> Clone for SharedSigmas<P> {
     fn clone(&self) -> Self {
@@ -297,6 +307,8 @@ impl<P> SharedSigmas<P> {
             sigmas,
             current: AtomicU64::new(NOT_TRACKING),
             candidate: AtomicU64::new(UNKNOWN),
+            current_sigma: AtomicU64::new(NO_SIGMA),
+            candidate_sigma: AtomicU64::new(NO_SIGMA),
         }
     }
 
@@ -359,6 +371,7 @@ impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
     fn set_current_region(&self, region: usize) {
         if self.current.load(Ordering::Relaxed) != NOT_TRACKING {
             self.current.store(region as u64, Ordering::Relaxed);
+            self.current_sigma.store(NO_SIGMA, Ordering::Relaxed);
         }
     }
     fn end_step(&self, moved: StateMove) {
@@ -371,9 +384,23 @@ impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
         }
         match moved {
             StateMove::Stayed => {}
-            StateMove::ByScaledProposal => self.current.store(candidate, Ordering::Relaxed),
-            StateMove::ByOtherProposal => self.current.store(UNKNOWN, Ordering::Relaxed),
+            StateMove::ByScaledProposal => {
+                self.current.store(candidate, Ordering::Relaxed);
+                let sigma = if candidate == UNKNOWN {
+                    NO_SIGMA
+                } else {
+                    self.candidate_sigma.load(Ordering::Relaxed)
+                };
+                self.current_sigma.store(sigma, Ordering::Relaxed);
+            }
+            StateMove::ByOtherProposal => {
+                self.current.store(UNKNOWN, Ordering::Relaxed);
+                self.current_sigma.store(NO_SIGMA, Ordering::Relaxed);
+            }
         }
+    }
+    fn scales_published(&self) {
+        self.current_sigma.store(NO_SIGMA, Ordering::Relaxed);
     }
 }
 
@@ -383,28 +410,42 @@ impl<P: Partition<Path>> ScaleSource for SharedSigmas<P> {
             .sigmas_of_region(self.sigmas.partition.region(x))
     }
 
-    /// The tracked region of the current state if known; otherwise looked up (and recorded
-    /// when tracking).
+    /// The tracked region (and its scale) of the current state if known; otherwise looked
+    /// up (and recorded when tracking).
     fn current_sigmas(&self, x: &Path) -> [f64; 2] {
         let c = self.current.load(Ordering::Relaxed);
         if c < UNKNOWN {
             debug_assert_eq!(c as usize, self.sigmas.partition.region(x));
-            return self.sigmas.sigmas_of_region(c as usize);
+            let s = self.current_sigma.load(Ordering::Relaxed);
+            if s != NO_SIGMA {
+                let s = f64::from_bits(s);
+                return [s, s * self.sigmas.sigma_ratio];
+            }
+            let sigmas = self.sigmas.sigmas_of_region(c as usize);
+            self.current_sigma
+                .store(sigmas[0].to_bits(), Ordering::Relaxed);
+            return sigmas;
         }
         let region = self.sigmas.partition.region(x);
+        let sigmas = self.sigmas.sigmas_of_region(region);
         if c == UNKNOWN {
             self.current.store(region as u64, Ordering::Relaxed);
+            self.current_sigma
+                .store(sigmas[0].to_bits(), Ordering::Relaxed);
         }
-        self.sigmas.sigmas_of_region(region)
+        sigmas
     }
 
-    /// Looked up, and recorded as the candidate's region when tracking.
+    /// Looked up, and recorded (with its scale) as the candidate's region when tracking.
     fn candidate_sigmas(&self, y: &Path) -> [f64; 2] {
         let region = self.sigmas.partition.region(y);
+        let sigmas = self.sigmas.sigmas_of_region(region);
         if self.current.load(Ordering::Relaxed) != NOT_TRACKING {
             self.candidate.store(region as u64, Ordering::Relaxed);
+            self.candidate_sigma
+                .store(sigmas[0].to_bits(), Ordering::Relaxed);
         }
-        self.sigmas.sigmas_of_region(region)
+        sigmas
     }
 }
 
