@@ -100,12 +100,7 @@ fn run<C: Controller<Kernel, Path>>(
     let (mut known, mut wrong, mut moved) = (0, 0, 0);
     for c in 0..8 {
         let kernel: Kernel = Mh::new(
-            ra_mixture(
-                kind,
-                Perturbation::new(scene, kind, sigmas.clone()),
-                bidir.clone(),
-            )
-            .unwrap(),
+            ra_mixture(kind, Perturbation::new(scene, kind, sigmas.clone()), bidir).unwrap(),
         );
         let mut rng = common::rng(40 + c);
         let x0 = loop {
