@@ -10,6 +10,8 @@
 #   p5        5 s: cornell and ajar-door at target acceptance 0.5, glossy-diffuse at 0.8
 #             (the paper's Necklace setting); the 8 paper configurations
 #   sweep     5 s: FIXED at 0.005 0.02 0.1 rad, both perturbations, the same scenes
+#   p5sweep   p5 and sweep in one batch, all 14 configurations interleaved within each seed
+#             (so that the tuned-FIXED frontier compares at equal time with the paper's four)
 #   ladder    ajar-door at 1 2 10 20 s (5 s comes from p5, 60 s from p60)
 #   t<N>      one rung: ajar-door at N s (e.g. t20)
 #   p60       ajar-door at 60 s
@@ -68,6 +70,7 @@ for p in "$@"; do
         done ;;
     p5) phase 5 "cornell glossy-diffuse ajar-door" "$configs" ;;
     sweep) phase 5 "cornell glossy-diffuse ajar-door" "$sweep_configs" ;;
+    p5sweep) phase 5 "cornell glossy-diffuse ajar-door" "$configs $sweep_configs" ;;
     ladder) for s in 1 2 10 20; do phase "$s" ajar-door "$configs"; done ;;
     p60) phase 60 ajar-door "$configs" ;;
     t[0-9]*) phase "${p#t}" ajar-door "$configs" ;;

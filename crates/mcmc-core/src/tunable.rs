@@ -71,17 +71,46 @@ pub trait SharedRegionalScales: Clone {
     fn split_region(&mut self, region: usize) -> Option<std::ops::Range<usize>>;
     /// True if both handles share the same scales (handing them over again is a no-op).
     fn same_as(&self, other: &Self) -> bool;
-    /// Starts recording the region of the first state this handle is asked about (the
-    /// proposal's current state) until the next call; returns false if the handle does not
-    /// record it (the default). Lets a controller that needs only the perturbation steps'
-    /// regions skip its own lookup ([`crate::controller::RegionalScale`]).
-    fn clear_region_hint(&self) -> bool {
+    /// Asks this handle to track the region of its chain's current state from now on and
+    /// returns true, or returns false if it cannot (the default). A tracking handle records
+    /// the regions its proposal looks up for the current state and for the candidate
+    /// ([`Self::current_region`]), and [`Self::end_step`] keeps the record valid: the region
+    /// of a state is then looked up once, when it is first proposed, instead of again on
+    /// every step it stays the current state ([`crate::controller::RegionalScale`]).
+    fn track_current_region(&self) -> bool {
         false
     }
-    /// The region recorded since [`Self::clear_region_hint`], if any.
-    fn region_hint(&self) -> Option<usize> {
+    /// The region of the chain's current state, if the handle tracks it and knows it.
+    fn current_region(&self) -> Option<usize> {
         None
     }
+    /// Records `region` as the current state's region (the controller looked it up), if the
+    /// handle tracks it.
+    fn set_current_region(&self, region: usize) {
+        let _ = region;
+    }
+    /// After every step of the chain while tracking: how the current state changed. After
+    /// [`StateMove::ByScaledProposal`] the candidate's region (looked up for the reverse
+    /// density) becomes the current state's; after [`StateMove::ByOtherProposal`] it is
+    /// unknown until looked up again.
+    fn end_step(&self, moved: StateMove) {
+        let _ = moved;
+    }
+    /// Called on every chain's handle after every synchronisation point, once the chain has
+    /// received the scales: the scales may have changed, so a tracking handle forgets any
+    /// scale it kept for the current state (its region stays valid).
+    fn scales_published(&self) {}
+}
+
+/// How a step changed the chain's current state, for [`SharedRegionalScales::end_step`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StateMove {
+    /// The candidate was rejected (or invalid): the state is unchanged.
+    Stayed,
+    /// The state is now the first-stage candidate of the proposal with the shared scales.
+    ByScaledProposal,
+    /// The state is now a candidate of another proposal (or of a later stage).
+    ByOtherProposal,
 }
 
 /// A kernel or proposal whose scales come from a [`SharedRegionalScales`] handle: how a shared

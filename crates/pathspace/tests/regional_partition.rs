@@ -176,6 +176,8 @@ fn screen_path(scene: &AnalyticScene, raster: [f64; 2]) -> Path {
 }
 
 /// Runs one chain's controller over `visits` (raster point, acceptance), then synchronises.
+/// The last step at each point reports an accepted move (the chain leaves for the next
+/// point), so that the handle does not keep the point's region as the current one.
 fn round<'a>(
     controller: &mut SharedRegionalAdaptation,
     kernel: &mut SharedSigmas<PathPartition<&'a AnalyticScene>>,
@@ -185,10 +187,11 @@ fn round<'a>(
 ) {
     for &(raster, accept, count) in visits {
         let x = screen_path(scene, raster);
-        for _ in 0..count {
+        for i in 0..count {
             controller.before_step(kernel, &x);
             let mut info = StepInfo::new(0);
             info.accept_prob[0] = accept;
+            info.accepted_stage = u8::from(i + 1 == count);
             Controller::<_, Path>::after_step(controller, kernel, &info);
         }
     }

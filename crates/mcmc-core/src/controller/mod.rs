@@ -3,6 +3,7 @@
 
 mod global_scale;
 mod large_step;
+mod region_table;
 mod regional_params;
 mod regional_pool;
 mod regional_scale;
@@ -23,6 +24,7 @@ pub use shared::{Both, SharedController};
 /// The tunable interfaces, re-exported from [`crate::tunable`] where they live.
 pub use crate::tunable::{
     HasSharedScales, LargeStepTunable, RegionalTunable, ScaleTunable, SharedRegionalScales,
+    StateMove,
 };
 
 use crate::kernel::StepInfo;

@@ -1,6 +1,7 @@
 //! The statistics of regional scale adaptation pooled over all chains, and the work done on
 //! them at a synchronisation point: the `lambda_k` updates of Alg. 1 and refinement.
 
+use super::region_table::RegionTable;
 use super::regional_params::{RegionalScaleParams, RegionalUpdateRule};
 use super::regional_scale::RegionStats;
 use crate::tunable::SharedRegionalScales;
@@ -19,7 +20,7 @@ pub(super) struct Visit {
 #[derive(Clone, Debug)]
 pub struct PooledRegionalScales<Sc> {
     sigmas: Option<Sc>,
-    regions: Vec<RegionStats>,
+    regions: RegionTable,
     params: Option<RegionalScaleParams>,
     mutations: u64,
     next_refine: u64,
@@ -38,7 +39,7 @@ impl<Sc> Default for PooledRegionalScales<Sc> {
     fn default() -> Self {
         Self {
             sigmas: None,
-            regions: Vec::new(),
+            regions: RegionTable::default(),
             params: None,
             mutations: 0,
             next_refine: 0,
@@ -62,7 +63,7 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
     /// Alg. 1's state of region `k` and its visits since the last refinement.
     #[must_use]
     pub fn region_stats(&self, k: usize) -> Option<RegionStats> {
-        self.regions.get(k).copied()
+        self.regions.get(k)
     }
 
     /// Number of regions.
@@ -108,7 +109,7 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
 
     /// Starts pooling from the scales of the first chain (all chains must share them).
     pub(super) fn init(&mut self, sigmas: &Sc, params: RegionalScaleParams) {
-        self.regions = vec![RegionStats::new(); sigmas.num_regions()];
+        self.regions = RegionTable::new(sigmas.num_regions());
         self.sigmas = Some(sigmas.clone());
         self.params = Some(params);
         self.next_refine = params.refine_every;
@@ -132,30 +133,33 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
             return;
         }
         let every_l = params.update_rule == RegionalUpdateRule::EveryLVisits;
+        let updates_every = self.updates_every;
         for v in visits {
             let k = v.region as usize;
-            let Some(state) = self.regions.get_mut(k) else {
-                debug_assert!(false, "visit to region {k} of {}", self.regions.len());
-                continue;
-            };
-            state.visits_since_refine += 1;
-            if !v.perturbed {
-                continue;
-            }
-            state.note_proposal(v.accept);
-            if every_l {
-                let lambda = sigmas.log_scale_of(k);
-                if let Some(new) = state.adapt.record(v.accept, lambda, &params.adapt) {
-                    if new != lambda {
-                        sigmas.set_log_scale_of(k, new);
+            let due = self.regions.update(k, |state| {
+                state.visits_since_refine += 1;
+                if !v.perturbed {
+                    return false;
+                }
+                state.note_proposal(v.accept);
+                if every_l {
+                    let lambda = sigmas.log_scale_of(k);
+                    if let Some(new) = state.adapt.record(v.accept, lambda, &params.adapt) {
+                        if new != lambda {
+                            sigmas.set_log_scale_of(k, new);
+                        }
                     }
+                    false
+                } else {
+                    state.adapt.visits += 1;
+                    state.adapt.accepted += v.accept;
+                    state.adapt.visits == updates_every
                 }
-            } else {
-                state.adapt.visits += 1;
-                state.adapt.accepted += v.accept;
-                if state.adapt.visits == self.updates_every {
-                    self.due.push(v.region);
-                }
+            });
+            match due {
+                Some(true) => self.due.push(v.region),
+                Some(false) => {}
+                None => debug_assert!(false, "visit to region {k} of {}", self.regions.len()),
             }
         }
     }
@@ -174,20 +178,22 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         // Regions are independent: the order of `due` does not matter.
         for &k in &self.due {
             let k = k as usize;
-            let a = &mut self.regions[k].adapt;
-            let rate = a.accepted / a.visits as f64;
-            let sign = if rate > p.target_acceptance {
-                1.0
-            } else if rate < p.target_acceptance {
-                -1.0
-            } else {
-                0.0
-            };
-            let lambda = (sigmas.log_scale_of(k) + p.gamma(a.updates) * sign).max(p.lambda_min);
-            sigmas.set_log_scale_of(k, lambda);
-            a.visits = 0;
-            a.accepted = 0.0;
-            a.updates += 1;
+            self.regions.update(k, |state| {
+                let a = &mut state.adapt;
+                let rate = a.accepted / a.visits as f64;
+                let sign = if rate > p.target_acceptance {
+                    1.0
+                } else if rate < p.target_acceptance {
+                    -1.0
+                } else {
+                    0.0
+                };
+                let lambda = (sigmas.log_scale_of(k) + p.gamma(a.updates) * sign).max(p.lambda_min);
+                sigmas.set_log_scale_of(k, lambda);
+                a.visits = 0;
+                a.accepted = 0.0;
+                a.updates += 1;
+            });
         }
         self.due.clear();
     }
@@ -224,7 +230,9 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         // Only the regions that existed before the pass are candidates (section 6.2).
         let cap = params.max_regions.unwrap_or(usize::MAX);
         for k in 0..before {
-            let parent = self.regions[k];
+            let Some(parent) = self.regions.get(k) else {
+                continue;
+            };
             if parent.visits_since_refine < threshold
                 || sigmas.num_regions().saturating_add(3) > cap
                 || sigmas.split_region(k).is_none()
@@ -234,13 +242,15 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
             let mut child = RegionStats::new();
             child.adapt.updates = (parent.adapt.updates / 4).max(1);
             child.recent_acceptance = parent.recent_acceptance;
-            self.regions[k] = child;
-            self.regions.resize(sigmas.num_regions(), child);
+            let fresh = self.regions.len();
+            self.regions.set(k, child);
+            self.regions.grow(sigmas.num_regions());
+            for id in fresh..self.regions.len() {
+                self.regions.set(id, child);
+            }
             self.splits += 1;
         }
-        for r in &mut self.regions {
-            r.visits_since_refine = 0;
-        }
+        self.regions.clear_refinement_visits();
         self.refinements += 1;
         while self.next_refine <= self.mutations {
             self.next_refine += params.refine_every;

@@ -8,7 +8,7 @@ use super::regional_pool::{PooledRegionalScales, Visit};
 use super::{AdaptState, Controller, SharedController};
 use crate::kernel::StepInfo;
 use crate::partition::Partition;
-use crate::tunable::{HasSharedScales, SharedRegionalScales};
+use crate::tunable::{HasSharedScales, SharedRegionalScales, StateMove};
 use crate::McmcError;
 
 /// Most visits a chain's controller keeps between two synchronisation points; further visits
@@ -91,9 +91,9 @@ pub const MAX_VISITS_PER_ROUND: usize = 1 << 20;
 pub struct RegionalScale {
     params: RegionalScaleParams,
     visits: Vec<Visit>,
-    current_region: usize,
-    /// The current step's region comes from the handle's hint ([`Self::observe`]).
-    hinted: bool,
+    /// The current step's region as [`Self::observe`] found it (`None`: the proposal looks
+    /// it up and the handle records it).
+    current_region: Option<usize>,
     steps: u64,
     dropped: u64,
     frozen: bool,
@@ -109,8 +109,7 @@ impl RegionalScale {
         Ok(Self {
             params,
             visits: Vec::new(),
-            current_region: 0,
-            hinted: false,
+            current_region: None,
             steps: 0,
             dropped: 0,
             frozen: params.freeze_after_mutations == Some(0),
@@ -138,56 +137,84 @@ impl RegionalScale {
     /// Before a step: notes the region of the current state `x` under `scales` (the kernel's
     /// handle, if it has one). What [`Controller::before_step`] does.
     ///
-    /// Without refinement only the scaled proposal's steps need a region, and that proposal
-    /// looks up the region of `x` itself: if the handle records it
-    /// ([`SharedRegionalScales::clear_region_hint`]), the lookup is left to the proposal and
-    /// [`Self::record_from`] reads it back (the same region, one lookup fewer per step).
+    /// A handle that tracks its chain's current region
+    /// ([`SharedRegionalScales::track_current_region`]) knows it whenever the state was
+    /// reached by the scaled proposal (whose reverse density looked up the candidate's
+    /// region) or stayed; otherwise the lookup is left to the scaled proposal, which makes it
+    /// anyway, unless refinement needs the region of every step. Only an unknown region that
+    /// refinement needs, or a handle that does not track, costs a lookup here, and it is
+    /// handed to the handle so that the proposal does not repeat it.
     pub fn observe<S, Sc>(&mut self, scales: Option<&Sc>, x: &S)
     where
         Sc: SharedRegionalScales,
         Sc::Partition: Partition<S>,
     {
+        let Some(s) = scales else {
+            return;
+        };
+        let tracked = s.track_current_region();
         if self.frozen {
             return;
         }
-        if let Some(s) = scales {
-            self.hinted = self.params.split_after_visits.is_none() && s.clear_region_hint();
-            if !self.hinted {
-                self.current_region = s.partition().region(x);
-            }
+        self.current_region = s.current_region();
+        if self.current_region.is_none() && (self.refines() || !tracked) {
+            let region = s.partition().region(x);
+            s.set_current_region(region);
+            self.current_region = Some(region);
         }
+    }
+
+    /// True if refinement counts the visits of every step.
+    fn refines(&self) -> bool {
+        self.params.split_after_visits.is_some()
     }
 
     /// After a step: records its visit and acceptance, the region as [`Self::observe`] found
-    /// it. What [`Controller::after_step`] does.
-    pub fn record(&mut self, info: &StepInfo) {
-        self.record_from::<NoScales>(None, info);
-    }
-
-    /// As [`Self::record`], reading the region from the handle's hint when [`Self::observe`]
-    /// left the lookup to the proposal. Steps of other proposals are then only counted (no
-    /// refinement needs their visits).
-    pub fn record_from<Sc: SharedRegionalScales>(&mut self, scales: Option<&Sc>, info: &StepInfo) {
-        self.steps += 1;
-        if self.frozen {
-            return;
-        }
+    /// it or, when it left the lookup to the proposal, as the handle `scales` recorded it;
+    /// then tells the handle how the step moved the state
+    /// ([`SharedRegionalScales::end_step`], also once adaptation froze). Steps of other
+    /// proposals are only counted unless refinement needs their visits. What
+    /// [`Controller::after_step`] does; pass the handle given to [`Self::observe`].
+    pub fn record<Sc: SharedRegionalScales>(&mut self, scales: Option<&Sc>, info: &StepInfo) {
         let perturbed = self
             .params
             .perturbation_component
             .is_none_or(|c| c == info.component);
-        if self.hinted {
-            match scales.and_then(SharedRegionalScales::region_hint) {
-                Some(region) if perturbed => self.current_region = region,
-                _ => return,
-            }
+        self.steps += 1;
+        if !self.frozen {
+            self.push_visit(scales, info, perturbed);
         }
+        if let Some(s) = scales {
+            s.end_step(match info.accepted_stage {
+                0 => StateMove::Stayed,
+                1 if perturbed => StateMove::ByScaledProposal,
+                _ => StateMove::ByOtherProposal,
+            });
+        }
+    }
+
+    /// Keeps the step's visit for the pool.
+    fn push_visit<Sc: SharedRegionalScales>(
+        &mut self,
+        scales: Option<&Sc>,
+        info: &StepInfo,
+        perturbed: bool,
+    ) {
+        if !perturbed && !self.refines() {
+            return;
+        }
+        let Some(region) = self
+            .current_region
+            .or_else(|| scales.and_then(SharedRegionalScales::current_region))
+        else {
+            return;
+        };
         if self.visits.len() >= MAX_VISITS_PER_ROUND {
             self.dropped += 1;
             return;
         }
         self.visits.push(Visit {
-            region: self.current_region as u32,
+            region: region as u32,
             perturbed,
             accept: info.accept_prob[0],
         });
@@ -217,10 +244,13 @@ impl RegionalScale {
         scales: Option<&mut Sc>,
         pooled: &PooledRegionalScales<Sc>,
     ) {
-        if let (Some(s), Some(mine)) = (pooled.sigmas(), scales) {
-            if !mine.same_as(s) {
-                *mine = s.clone();
+        if let Some(mine) = scales {
+            if let Some(s) = pooled.sigmas() {
+                if !mine.same_as(s) {
+                    *mine = s.clone();
+                }
             }
+            mine.scales_published();
         }
         self.frozen = pooled.is_frozen();
     }
@@ -236,7 +266,7 @@ where
     }
 
     fn after_step(&mut self, kernel: &mut K, info: &StepInfo) {
-        self.record_from(kernel.shared_scales(), info);
+        self.record(kernel.shared_scales(), info);
     }
 
     fn is_frozen(&self) -> bool {
@@ -330,31 +360,5 @@ mod tests {
             ..RegionalScaleParams::otsu2018()
         };
         assert!(RegionalScale::new(bad).is_err());
-    }
-}
-
-/// A handle type for [`RegionalScale::record`], which reads no handle.
-#[derive(Clone)]
-enum NoScales {}
-
-impl SharedRegionalScales for NoScales {
-    type Partition = ();
-    fn partition(&self) -> &() {
-        match *self {}
-    }
-    fn num_regions(&self) -> usize {
-        match *self {}
-    }
-    fn log_scale_of(&self, _region: usize) -> f64 {
-        match *self {}
-    }
-    fn set_log_scale_of(&mut self, _region: usize, _lambda: f64) {
-        match *self {}
-    }
-    fn split_region(&mut self, _region: usize) -> Option<std::ops::Range<usize>> {
-        match *self {}
-    }
-    fn same_as(&self, _other: &Self) -> bool {
-        match *self {}
     }
 }

@@ -290,11 +290,11 @@ impl<S: PathScene + ?Sized, Sc: ScaleSource, K: DirectionKernel> Proposal<Path>
     for Perturbation<'_, S, Sc, K>
 {
     fn propose<R: Rng + ?Sized>(&self, x: &Path, y: &mut Path, rng: &mut R) -> Proposed {
-        let sx = self.scale.sigmas(x);
+        let sx = self.scale.current_sigmas(x);
         if !self.propose_with(x, y, rng, sx) {
             return Proposed::Invalid { component: 0 };
         }
-        let sy = self.scale.sigmas(y);
+        let sy = self.scale.candidate_sigmas(y);
         Proposed::hastings(self.log_q_with(y, x, sy) - self.log_q_with(x, y, sx))
     }
 

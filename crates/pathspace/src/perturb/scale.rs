@@ -16,6 +16,20 @@ use crate::path::Path;
 pub trait ScaleSource {
     /// `[sigma_1, sigma_2]` (radians, positive) at state `x`.
     fn sigmas(&self, x: &Path) -> [f64; 2];
+
+    /// [`Self::sigmas`] at the chain's current state `x`, which a proposal perturbs from.
+    /// A source may remember the region of the current state between steps (the regional
+    /// scales do when their controller tracks it), so only call this with the state the
+    /// chain is at.
+    fn current_sigmas(&self, x: &Path) -> [f64; 2] {
+        self.sigmas(x)
+    }
+
+    /// [`Self::sigmas`] at a candidate `y` proposed from the current state (for the reverse
+    /// density); a source may remember its region for when the candidate is accepted.
+    fn candidate_sigmas(&self, y: &Path) -> [f64; 2] {
+        self.sigmas(y)
+    }
 }
 
 /// The same scales everywhere (the paper's FIXED variant).

@@ -92,7 +92,7 @@ where
     }
 
     fn after_step(&mut self, kernel: &mut K, info: &StepInfo) {
-        self.0.record_from(kernel.shared_sigmas(), info);
+        self.0.record(kernel.shared_sigmas(), info);
     }
 
     fn is_frozen(&self) -> bool {

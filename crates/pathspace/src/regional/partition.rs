@@ -154,10 +154,14 @@ pub struct DirectionPartition<C> {
     camera: C,
     top: usize,
     cells: Vec<PlanePartition>,
-    /// Per top cell: local id -> global id.
+    /// Per top cell: local id -> global id (empty until the first split).
     global_of: Vec<Vec<u32>>,
-    /// Global id -> (top cell, local id).
+    /// Global id -> (top cell, local id) (empty until the first split).
     owner: Vec<(u32, u32)>,
+    /// Regions per top cell while no cell has split: then the global id of local id `l` in
+    /// cell `c` is `c * n + l`, and neither table is needed (a grid's 10^6 ids would miss
+    /// the cache).
+    unsplit_per_cell: Option<usize>,
 }
 
 impl<C: Camera> DirectionPartition<C> {
@@ -171,20 +175,26 @@ impl<C: Camera> DirectionPartition<C> {
         let per_cell = bottom.num_regions();
         let total = (n_top * n_top) as f64 * per_cell as f64;
         PathspaceError::check_range("regions", total, 1.0, f64::from(u32::MAX))?;
-        let cells = vec![bottom; n_top * n_top];
-        let mut global_of = Vec::with_capacity(cells.len());
-        let mut owner = Vec::with_capacity(total as usize);
-        for c in 0..cells.len() {
-            global_of.push((0..per_cell).map(|l| (c * per_cell + l) as u32).collect());
-            owner.extend((0..per_cell).map(|l| (c as u32, l as u32)));
-        }
         Ok(Self {
             camera,
             top: n_top,
-            cells,
-            global_of,
-            owner,
+            cells: vec![bottom; n_top * n_top],
+            global_of: Vec::new(),
+            owner: Vec::new(),
+            unsplit_per_cell: Some(per_cell),
         })
+    }
+
+    /// Builds the id tables of an unsplit partition (before its first split).
+    fn build_tables(&mut self, per_cell: usize) {
+        let cells = self.cells.len();
+        self.global_of = (0..cells)
+            .map(|c| (0..per_cell).map(|l| (c * per_cell + l) as u32).collect())
+            .collect();
+        self.owner = (0..cells)
+            .flat_map(|c| (0..per_cell).map(move |l| (c as u32, l as u32)))
+            .collect();
+        self.unsplit_per_cell = None;
     }
 
     /// `N_top`.
@@ -199,6 +209,10 @@ impl<C: Camera> DirectionPartition<C> {
     /// If `region >= num_regions()`.
     #[must_use]
     pub fn cell_of(&self, region: usize) -> (usize, usize) {
+        if let Some(per_cell) = self.unsplit_per_cell {
+            assert!(region < self.num_regions(), "region {region}");
+            return (region / per_cell, region % per_cell);
+        }
         let (c, l) = self.owner[region];
         (c as usize, l as usize)
     }
@@ -218,7 +232,11 @@ impl<C: Camera> DirectionPartition<C> {
         let n = self.top;
         let cell = |v: f64| ((v.clamp(0.0, 1.0) * n as f64) as usize).min(n - 1);
         let c = cell(screen[1]) * n + cell(screen[0]);
-        self.global_of[c][self.cells[c].region(dir)] as usize
+        let local = self.cells[c].region(dir);
+        match self.unsplit_per_cell {
+            Some(per_cell) => c * per_cell + local,
+            None => self.global_of[c][local] as usize,
+        }
     }
 }
 
@@ -228,11 +246,18 @@ impl<C: Camera> Partition<Path> for DirectionPartition<C> {
         self.region_of_point(screen, dir)
     }
     fn num_regions(&self) -> usize {
-        self.owner.len()
+        match self.unsplit_per_cell {
+            Some(per_cell) => self.cells.len() * per_cell,
+            None => self.owner.len(),
+        }
     }
     fn split(&mut self, region: usize) -> Option<Range<usize>> {
-        let (c, l) = self.owner[region];
-        let local = self.cells[c as usize].split(l as usize)?;
+        let (c, l) = self.cell_of(region);
+        let local = self.cells[c].split(l)?;
+        if let Some(per_cell) = self.unsplit_per_cell {
+            self.build_tables(per_cell);
+        }
+        let c = c as u32;
         let fresh = self.owner.len();
         for l in local {
             let g = self.owner.len() as u32;

@@ -6,7 +6,7 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
-use mcmc_core::controller::SharedRegionalScales;
+use mcmc_core::controller::{SharedRegionalScales, StateMove};
 use mcmc_core::{Mh, Mixture, Partition};
 
 use super::partition::PathPartition;
@@ -260,37 +260,55 @@ impl<P: Partition<Path>> ScaleSource for RegionalSigmas<P> {
 /// synchronisation points of the render loop (all clones see them from the next round) and
 /// hands every chain a new handle only after a split. Cloning is cheap (a reference count).
 ///
-/// Each handle also records, on request of the controller, the region of the first path it is
-/// asked about (the perturbation's current state), so that the controller need not look it
-/// up again ([`SharedRegionalScales::clear_region_hint`]); the record is the handle's own,
-/// never shared.
+/// Each handle can also track the region of its chain's current state, on request of the
+/// controller ([`SharedRegionalScales::track_current_region`]): the perturbation looks up the
+/// region of every candidate for the reverse density anyway (eq. 2-3), and once the candidate
+/// is accepted that is the current state's region, so the next steps need no lookup of their
+/// own. With the region it keeps the region's `sigma_1` as read in this round (the scales
+/// change only at synchronisation points, after which the controller calls
+/// [`SharedRegionalScales::scales_published`]), so a step reads the shared scales only for
+/// its candidate. The record is the handle's own, never shared, and a clone does not track.
 #[derive(Debug)]
 pub struct SharedSigmas<P> {
     sigmas: Arc<RegionalSigmas<P>>,
-    /// `NO_HINT` (not recording), `WANT_HINT` (recording), or the recorded region.
-    hint: AtomicU64,
+    /// `NOT_TRACKING`, `UNKNOWN`, or the region of the chain's current state.
+    current: AtomicU64,
+    /// `UNKNOWN`, or the region of this step's candidate.
+    candidate: AtomicU64,
+    /// `sigma_1` of `current` read since the last synchronisation point (`f64` bits), or
+    /// `NO_SIGMA`.
+    current_sigma: AtomicU64,
+    /// `sigma_1` of `candidate` (`f64` bits), valid while `candidate` is.
+    candidate_sigma: AtomicU64,
 }
 
-/// [`SharedSigmas::hint`]: not recording.
-const NO_HINT: u64 = u64::MAX;
-/// [`SharedSigmas::hint`]: recording the next region asked for.
-const WANT_HINT: u64 = u64::MAX - 1;
+/// [`SharedSigmas::current`]: not tracking.
+const NOT_TRACKING: u64 = u64::MAX;
+/// [`SharedSigmas::current`], [`SharedSigmas::candidate`]: tracking, region not known.
+const UNKNOWN: u64 = u64::MAX - 1;
+/// [`SharedSigmas::current_sigma`]: not read yet (a NaN pattern no scale has).
+const NO_SIGMA: u64 = u64::MAX;
 
 impl<P> Clone for SharedSigmas<P> {
     fn clone(&self) -> Self {
-        Self {
-            sigmas: Arc::clone(&self.sigmas),
-            hint: AtomicU64::new(NO_HINT),
-        }
+        Self::from_arc(Arc::clone(&self.sigmas))
     }
 }
 
 impl<P> SharedSigmas<P> {
     /// Shares `sigmas`.
     pub fn new(sigmas: RegionalSigmas<P>) -> Self {
+        Self::from_arc(Arc::new(sigmas))
+    }
+
+    /// A handle that does not track.
+    fn from_arc(sigmas: Arc<RegionalSigmas<P>>) -> Self {
         Self {
-            sigmas: Arc::new(sigmas),
-            hint: AtomicU64::new(NO_HINT),
+            sigmas,
+            current: AtomicU64::new(NOT_TRACKING),
+            candidate: AtomicU64::new(UNKNOWN),
+            current_sigma: AtomicU64::new(NO_SIGMA),
+            candidate_sigma: AtomicU64::new(NO_SIGMA),
         }
     }
 
@@ -340,23 +358,94 @@ impl<P: Partition<Path> + Clone> SharedRegionalScales for SharedSigmas<P> {
     fn same_as(&self, other: &Self) -> bool {
         self.ptr_eq(other)
     }
-    fn clear_region_hint(&self) -> bool {
-        self.hint.store(WANT_HINT, Ordering::Relaxed);
+    fn track_current_region(&self) -> bool {
+        if self.current.load(Ordering::Relaxed) == NOT_TRACKING {
+            self.current.store(UNKNOWN, Ordering::Relaxed);
+        }
         true
     }
-    fn region_hint(&self) -> Option<usize> {
-        let h = self.hint.load(Ordering::Relaxed);
-        (h < WANT_HINT).then_some(h as usize)
+    fn current_region(&self) -> Option<usize> {
+        let c = self.current.load(Ordering::Relaxed);
+        (c < UNKNOWN).then_some(c as usize)
+    }
+    fn set_current_region(&self, region: usize) {
+        if self.current.load(Ordering::Relaxed) != NOT_TRACKING {
+            self.current.store(region as u64, Ordering::Relaxed);
+            self.current_sigma.store(NO_SIGMA, Ordering::Relaxed);
+        }
+    }
+    fn end_step(&self, moved: StateMove) {
+        let candidate = self.candidate.load(Ordering::Relaxed);
+        if candidate != UNKNOWN {
+            self.candidate.store(UNKNOWN, Ordering::Relaxed);
+        }
+        if self.current.load(Ordering::Relaxed) == NOT_TRACKING {
+            return;
+        }
+        match moved {
+            StateMove::Stayed => {}
+            StateMove::ByScaledProposal => {
+                self.current.store(candidate, Ordering::Relaxed);
+                let sigma = if candidate == UNKNOWN {
+                    NO_SIGMA
+                } else {
+                    self.candidate_sigma.load(Ordering::Relaxed)
+                };
+                self.current_sigma.store(sigma, Ordering::Relaxed);
+            }
+            StateMove::ByOtherProposal => {
+                self.current.store(UNKNOWN, Ordering::Relaxed);
+                self.current_sigma.store(NO_SIGMA, Ordering::Relaxed);
+            }
+        }
+    }
+    fn scales_published(&self) {
+        self.current_sigma.store(NO_SIGMA, Ordering::Relaxed);
     }
 }
 
 impl<P: Partition<Path>> ScaleSource for SharedSigmas<P> {
     fn sigmas(&self, x: &Path) -> [f64; 2] {
-        let region = self.sigmas.partition.region(x);
-        if self.hint.load(Ordering::Relaxed) == WANT_HINT {
-            self.hint.store(region as u64, Ordering::Relaxed);
+        self.sigmas
+            .sigmas_of_region(self.sigmas.partition.region(x))
+    }
+
+    /// The tracked region (and its scale) of the current state if known; otherwise looked
+    /// up (and recorded when tracking).
+    fn current_sigmas(&self, x: &Path) -> [f64; 2] {
+        let c = self.current.load(Ordering::Relaxed);
+        if c < UNKNOWN {
+            debug_assert_eq!(c as usize, self.sigmas.partition.region(x));
+            let s = self.current_sigma.load(Ordering::Relaxed);
+            if s != NO_SIGMA {
+                let s = f64::from_bits(s);
+                return [s, s * self.sigmas.sigma_ratio];
+            }
+            let sigmas = self.sigmas.sigmas_of_region(c as usize);
+            self.current_sigma
+                .store(sigmas[0].to_bits(), Ordering::Relaxed);
+            return sigmas;
         }
-        self.sigmas.sigmas_of_region(region)
+        let region = self.sigmas.partition.region(x);
+        let sigmas = self.sigmas.sigmas_of_region(region);
+        if c == UNKNOWN {
+            self.current.store(region as u64, Ordering::Relaxed);
+            self.current_sigma
+                .store(sigmas[0].to_bits(), Ordering::Relaxed);
+        }
+        sigmas
+    }
+
+    /// Looked up, and recorded (with its scale) as the candidate's region when tracking.
+    fn candidate_sigmas(&self, y: &Path) -> [f64; 2] {
+        let region = self.sigmas.partition.region(y);
+        let sigmas = self.sigmas.sigmas_of_region(region);
+        if self.current.load(Ordering::Relaxed) != NOT_TRACKING {
+            self.candidate.store(region as u64, Ordering::Relaxed);
+            self.candidate_sigma
+                .store(sigmas[0].to_bits(), Ordering::Relaxed);
+        }
+        sigmas
     }
 }
 
