@@ -46,7 +46,7 @@ pub mod testing;
 
 pub use error::PssError;
 pub use fresh::FreshPss;
-pub use lazy_pairs::{LazyOrbital, LazyPairParams, LazyPairwise};
+pub use lazy_pairs::{LazyOrbital, LazyPairParams, LazyPairwise, PairDraws};
 pub use mcmc_core::delayed_rejection::{WrappedCauchy, RIOUX_LAVOIE2020_RHO};
 pub use mutation::{standard_normal_quantile, wrap, KelemenParams, SmallMutation};
 pub use on_layout::{LayoutGhost, LogQPair, OnLayout, PairwiseMltProposal};
