@@ -130,6 +130,13 @@ impl AdaptState {
         if self.visits < p.updates_every {
             return None;
         }
+        Some(self.update(lambda, p))
+    }
+
+    /// The update of Alg. 1 from the visits accumulated so far (at least one): returns
+    /// `max(lambda + gamma_n sgn(A/i - alpha*), lambda_min)` (eq. 5) and starts the next
+    /// accumulation (`i = 0`, `A = 0`, `n += 1`).
+    pub fn update(&mut self, lambda: f64, p: &ScaleAdaptParams) -> f64 {
         let rate = self.accepted / self.visits as f64;
         let sign = if rate > p.target_acceptance {
             1.0
@@ -142,7 +149,7 @@ impl AdaptState {
         self.visits = 0;
         self.accepted = 0.0;
         self.updates += 1;
-        Some(new)
+        new
     }
 }
 

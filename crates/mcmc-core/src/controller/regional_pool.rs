@@ -179,20 +179,8 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         for &k in &self.due {
             let k = k as usize;
             self.regions.update(k, |state| {
-                let a = &mut state.adapt;
-                let rate = a.accepted / a.visits as f64;
-                let sign = if rate > p.target_acceptance {
-                    1.0
-                } else if rate < p.target_acceptance {
-                    -1.0
-                } else {
-                    0.0
-                };
-                let lambda = (sigmas.log_scale_of(k) + p.gamma(a.updates) * sign).max(p.lambda_min);
+                let lambda = state.adapt.update(sigmas.log_scale_of(k), p);
                 sigmas.set_log_scale_of(k, lambda);
-                a.visits = 0;
-                a.accepted = 0.0;
-                a.updates += 1;
             });
         }
         self.due.clear();
