@@ -14,8 +14,10 @@
 //! does not count the time other processes held the core.
 //!
 //! `cargo run --release --example regional_overhead -- <scene> <lens|multichain>
-//! <fixed|global|grid|quadtree> [mutations per pixel, 100] [size, 64] [round mutations]` prints
-//! one CSV line:
+//! <fixed|global|grid|quadtree> [mutations per pixel, 100] [size, 64] [round mutations]
+//! [frozen]` prints one CSV line (`frozen`: the regional kernel with adaptation frozen from the
+//! start, i.e. the per-region scale lookups of eq. 2-3 without any bookkeeping; run it with
+//! rounds of 1000 to separate what the regional kernel costs from what adapting costs):
 //! `scene,perturbation,adapt,mutations,cpu_seconds,mutations_per_cpu_second,regions,wall_seconds`.
 
 use std::sync::atomic::AtomicBool;
@@ -31,7 +33,7 @@ use render::session::NoProgress;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: regional_overhead <scene> <lens|multichain> <fixed|global|grid|quadtree> [mpp] [size]";
+    let usage = "usage: regional_overhead <scene> <lens|multichain> <fixed|global|grid|quadtree> [mpp] [size] [round mutations] [frozen]";
     let [scene_name, kind, adapt, ..] = args.as_slice() else {
         return Err(usage.into());
     };
@@ -66,8 +68,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         shard: Shard::default(),
         normalization: mcmc_core::render_loop::NormalizationMode::Pooled,
     };
+    let frozen = match args.get(6).map(String::as_str) {
+        None => false,
+        Some("frozen") => true,
+        Some(_) => return Err(usage.into()),
+    };
     let mut params = adapt_params(adapt, kind, PATHMLT_SIGMA, &settings);
     params.adapt.gamma_max = 1e-9;
+    if frozen {
+        params.freeze_after_mutations = Some(0);
+    }
     let run = AdaptRender {
         kind,
         adapt,

@@ -16,7 +16,9 @@ use crate::progress::Progress;
 use crate::target::Target;
 use crate::ChainRng;
 
-/// Mutations between two checks of the cancel flag and the deadline.
+/// Mutations of a job between two checks of the cancel flag and the deadline (counted across
+/// its chains and rounds, so that short synchronisation rounds do not read the clock once per
+/// chain).
 const POLL_EVERY: u64 = 64;
 
 /// A chain of a job with its remaining mutations.
@@ -38,6 +40,8 @@ pub(crate) struct Job<'t, T: Target, K, C, Sk> {
     /// Another shard's job run only for the pooled statistics of coupled controllers
     /// ([`super::Shard`]): its chains step without splatting.
     pub(crate) muted: bool,
+    /// Mutations since the job last polled its clocks (below [`POLL_EVERY`]).
+    pub(crate) since_poll: u64,
 }
 
 impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
@@ -51,6 +55,7 @@ impl<T: Target, K, C, Sk> Job<'_, T, K, C, Sk> {
             dropped: 0,
             non_finite: 0,
             muted: false,
+            since_poll: 0,
         }
     }
 }
@@ -98,7 +103,8 @@ struct Tally<'a> {
 }
 
 /// One round of a job's chains (`round` mutations each, fewer if a chain's budget is
-/// nearly used), polling `stops` every [`POLL_EVERY`] mutations; returns the steps whose
+/// nearly used), polling `stops` every [`POLL_EVERY`] mutations of the job (`since_poll`
+/// carries the count from round to round); returns the steps whose
 /// candidate had a non-finite density. With a `tally`, every step whose candidate came from
 /// an independent component ([`Kernel::independent_density`]) adds `f / q` to its target's
 /// sums (in the job's fixed order of steps).
@@ -109,6 +115,7 @@ fn step_round<T, K, C, O>(
     mut tally: Option<Tally<'_>>,
     round: u64,
     stops: &Stops<'_>,
+    since_poll: &mut u64,
     observer: &mut O,
     progress: &dyn Progress,
 ) -> u64
@@ -125,11 +132,13 @@ where
         // The first block of a job's first chain in the first round ignores the deadline.
         let mut guaranteed = stops.first_round && i == 0;
         while left > 0 {
-            if (stops.cancelled)() || (!guaranteed && (stops.late)()) {
+            if (*since_poll == 0 || guaranteed)
+                && ((stops.cancelled)() || (!guaranteed && (stops.late)()))
+            {
                 break 'chains;
             }
             guaranteed = false;
-            let n = left.min(POLL_EVERY);
+            let n = left.min(POLL_EVERY - *since_poll);
             for _ in 0..n {
                 match chain.step(observer) {
                     Ok(info) => {
@@ -146,6 +155,7 @@ where
             }
             left -= n;
             *remaining -= n;
+            *since_poll = (*since_poll + n) % POLL_EVERY;
             if observer.reports_progress() {
                 progress.advance(n);
             }
@@ -209,6 +219,7 @@ where
                 dropped,
                 non_finite,
                 muted,
+                since_poll,
             } = job;
             let stops = Stops {
                 cancelled: &cancelled,
@@ -216,7 +227,16 @@ where
                 first_round: first,
             };
             if *muted {
-                step_round(chains, weights, None, round, &stops, &mut (), progress);
+                step_round(
+                    chains,
+                    weights,
+                    None,
+                    round,
+                    &stops,
+                    since_poll,
+                    &mut (),
+                    progress,
+                );
                 return;
             }
             let tally = count_large_steps.then_some(Tally {
@@ -230,6 +250,7 @@ where
                 tally,
                 round,
                 &stops,
+                since_poll,
                 &mut observer,
                 progress,
             );
