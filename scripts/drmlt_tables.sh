@@ -13,7 +13,7 @@
 # its own LOCK and OUT; CPUS pins every render to those cores (`taskset -c CPUS`, inside the lock).
 #
 # Usage: [SCENES="a b"] [OUT=dir] [LOCK=file|none] [PAUSE=s] [FIRST_SEED=n] [CPUS=list]
-#        scripts/drmlt_tables.sh [SECONDS] [SEEDS] [MPP]
+#        [BIN=a built examples/drmlt, instead of building it] scripts/drmlt_tables.sh [SECONDS] [SEEDS] [MPP]
 #   defaults: 30 s, 5 seeds from seed 0, 64 mutations per pixel; scenes cornell-glass
 #   glossy-highlight caustic-pool thin-highlight thin-bar; OUT target/drmlt-footing.
 # Duration: 14 methods x SECONDS x SEEDS x scenes for equal time (30 s, 5 seeds, 5 scenes:
@@ -32,11 +32,15 @@ mpp="${3:-64}"
 out="${OUT:-target/drmlt-footing}"
 scenes="${SCENES:-cornell-glass glossy-highlight caustic-pool thin-highlight thin-bar}"
 first_seed="${FIRST_SEED:-0}"
-cargo build --release --quiet --example drmlt
 mkdir -p "$out"
 # A private copy: a concurrent `cargo build` must not replace the binary mid-measurement.
 bin="$out/drmlt"
-cp target/release/examples/drmlt "$bin"
+if [ -n "${BIN:-}" ]; then
+    cp "$BIN" "$bin"
+else
+    cargo build --release --quiet --example drmlt
+    cp target/release/examples/drmlt "$bin"
+fi
 lockfile="${LOCK:-/work/measure.lock}"
 pin=()
 if [ -n "${CPUS:-}" ]; then pin=(taskset -c "$CPUS"); fi
