@@ -203,9 +203,8 @@ fn scenes_follow_the_conventions() {
         // thin-highlight and thin-bar, which faces the strip it lights from 35 cm (up and away
         // from the camera)
         let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-        let aimed = |e: &&EmitterInfo| {
-            matches!(name, "thin-highlight" | "thin-bar") && e.normal[2] < 0.0
-        };
+        let aimed =
+            |e: &&EmitterInfo| matches!(name, "thin-highlight" | "thin-bar") && e.normal[2] < 0.0;
         for e in emitters.iter().filter(|e| e.planar).filter(|e| !aimed(e)) {
             assert!(
                 dot(e.normal, sub(centre, e.centroid)) > 0.0,
