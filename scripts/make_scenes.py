@@ -753,6 +753,49 @@ def scene_thin_highlight():
     return s
 
 
+def scene_thin_bar():
+    s = Scene("thin-bar", "A thin glossy highlight spanning many pixels on a narrow bar of metal, reached only by "
+                          "paths of two or more bounces: the bar, seen at a grazing angle, mirrors a long, thin, "
+                          "brightly lit white strip (itself lit by a hidden emitter) and nothing else bright "
+                          "(built to show the premise of the DR paper's Fig. 10 without a broad glossy surface).")
+    s.emitter("lamp", (600.0, 590.0, 560.0))
+    s.emitter("fill", (0.5, 0.5, 0.5))
+    s.metal("bar", (0.95, 0.93, 0.88), 0.03)
+    s.diffuse("strip", (0.9, 0.9, 0.9))
+    s.diffuse("floor", (0.2, 0.2, 0.2))
+    s.diffuse("block", (0.2, 0.35, 0.6))
+    E = 4.0
+    s.mesh("floor", quad((-E, 0, -2.5), (E, 0, -2.5), (E, 0, E), (-E, 0, E), facing=(0, 1, 0)), "floor")
+    s.mesh("block", box((0.55, 0.1 + 0.01, -0.35), (0.2, 0.2, 0.2), rot_deg=-20.0, bottom=True), "block")
+    # the strip and lamp as in thin-highlight: 1.4 m x 2 mm of white diffuse along x, tilted to face
+    # the point of the floor-level mirror that reflects it into the camera
+    eye = (0.0, 0.4, 2.0)
+    sc = (0.0, 0.55, -1.3)
+    mirror_eye = (eye[0], 2 * 0.01 - eye[1], eye[2])
+    tt = (sc[1] - 0.01) / (sc[1] - mirror_eye[1])
+    hit = add(sc, mul(sub(mirror_eye, sc), tt))
+    nrm = normalize(sub(hit, sc))
+    across = normalize(cross(nrm, (1.0, 0.0, 0.0)))
+    hl, hw = 0.7, 0.001
+    corners = [add(sc, add(mul((1.0, 0.0, 0.0), sx * hl), mul(across, sy * hw)))
+               for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    s.mesh("strip", quad(*corners, facing=nrm), "strip")
+    # the bar: 1.6 m long, 20 cm deep and 1 cm tall, centred on the mirror point; around it the
+    # camera sees the floor, and the bar mirrors the open sky behind the strip (black: no backdrop)
+    # and the strip, so no broad glossy band surrounds the highlight
+    s.mesh("bar", box((0.0, 0.005, hit[2]), (1.6, 0.01, 0.2), bottom=False), "bar")
+    lc = add(sc, (0.0, -0.25, 0.25))
+    ln = normalize(sub(sc, lc))
+    lacross = normalize(cross(ln, (1.0, 0.0, 0.0)))
+    ll, lw = 0.75, 0.04
+    lcorners = [add(lc, add(mul((1.0, 0.0, 0.0), sx * ll), mul(lacross, sy * lw)))
+                for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    s.mesh("lamp", quad(*lcorners, facing=ln), "lamp")
+    s.mesh("fill", quad((-2, 3, 0.5), (2, 3, 0.5), (2, 3, 3.0), (-2, 3, 3.0), facing=(0, -1, 0)), "fill")
+    s.camera(eye, (0.0, 0.08, -0.3), 35.0)
+    return s
+
+
 def scene_glossy_diffuse():
     s = Scene("glossy-diffuse", "Glossy + diffuse mix (the regional-adaptive paper's Necklace situation): a "
                                 "necklace of glossy metal beads and links on a diffuse floor, between coloured "
@@ -883,7 +926,8 @@ def scene_motion_blur():
 
 
 SCENES = [scene_cornell, scene_cornell_glass, scene_caustic_pool, scene_ajar_door, scene_glossy_highlight,
-          scene_glossy_diffuse, scene_dof, scene_motion_blur, scene_thin_highlight]
+          scene_glossy_diffuse, scene_dof, scene_motion_blur, scene_thin_highlight,
+          scene_thin_bar]
 
 
 def main():

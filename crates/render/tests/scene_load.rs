@@ -320,6 +320,7 @@ fn bundled_scenes_load_with_camera_extras() {
         "dof",
         "motion-blur",
         "thin-highlight",
+        "thin-bar",
     ] {
         let s = Scene::load(&scenes.join(format!("{name}.gltf")))
             .unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -1,6 +1,6 @@
 //! The bundled scene set (`scenes/`, written by `scripts/make_scenes.py`).
 //!
-//! * every one of the nine scenes is present (so the other checks cannot pass vacuously);
+//! * every one of the ten scenes is present (so the other checks cannot pass vacuously);
 //! * each loads with the `gltf` crate and follows the conventions of `docs/scenes.md`
 //!   (one perspective camera, emitters via `KHR_materials_emissive_strength`, per-vertex normals
 //!   that agree with the triangle winding, planar emitters facing into the scene, < 100k
@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The scene set: one per phenomenon (see docs/scenes.md).
-const SCENES: [&str; 9] = [
+const SCENES: [&str; 10] = [
     "cornell",
     "cornell-glass",
     "caustic-pool",
@@ -24,6 +24,7 @@ const SCENES: [&str; 9] = [
     "dof",
     "motion-blur",
     "thin-highlight",
+    "thin-bar",
 ];
 
 fn repo_root() -> PathBuf {
@@ -38,7 +39,7 @@ fn scene_path(name: &str) -> PathBuf {
 }
 
 #[test]
-fn all_nine_scenes_are_present() {
+fn all_ten_scenes_are_present() {
     for name in SCENES {
         let gltf = scene_path(name);
         assert!(gltf.is_file(), "missing scene {}", gltf.display());
@@ -198,10 +199,12 @@ fn scenes_follow_the_conventions() {
         }
         assert!(triangles < 100_000, "{name}: {triangles} triangles");
         assert!(!emitters.is_empty(), "{name}: no emitter");
-        // planar emitters face the middle of the scene's bounding box, except thin-highlight's
-        // lamp, which faces the strip it lights from 35 cm (up and away from the camera)
+        // planar emitters face the middle of the scene's bounding box, except the lamp of
+        // thin-highlight and thin-bar, which faces the strip it lights from 35 cm (up and away
+        // from the camera)
         let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-        let aimed = |e: &&EmitterInfo| name == "thin-highlight" && e.normal[2] < 0.0;
+        let aimed =
+            |e: &&EmitterInfo| matches!(name, "thin-highlight" | "thin-bar") && e.normal[2] < 0.0;
         for e in emitters.iter().filter(|e| e.planar).filter(|e| !aimed(e)) {
             assert!(
                 dot(e.normal, sub(centre, e.centroid)) > 0.0,
