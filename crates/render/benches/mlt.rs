@@ -224,7 +224,8 @@ fn gradient(c: &mut Criterion) {
         };
         match moved {
             0..=8 => replay.bench::<8>(&mut group),
-            9..=12 => replay.bench::<12>(&mut group),
+            9..=10 => replay.bench::<10>(&mut group),
+            11..=12 => replay.bench::<12>(&mut group),
             _ => replay.bench::<16>(&mut group),
         }
         let fd = target.with_method(GradientMethod::FiniteDifference);

@@ -116,7 +116,11 @@ fn f32_lane_gradient_matches_the_f64_lane_replay() {
                 found += 1;
                 let mut g = Vec::new();
                 target.evaluate_with_grad(&mut x, &mut payload, &mut g);
-                assert_eq!(g.len(), n, "{name} depth {depth}: one entry per moved coordinate");
+                assert_eq!(
+                    g.len(),
+                    n,
+                    "{name} depth {depth}: one entry per moved coordinate"
+                );
                 let m = norm_relative_difference(&g, &g64);
                 assert!(
                     m < 1e-4,

@@ -144,8 +144,8 @@ thread_local! {
 ///
 /// - [`GradientMethod::Dual`] (default): the f32 evaluator gives the value
 ///   the chain uses; the differentiable evaluator [`crate::bdpt::diff`] replays the same path
-///   in forward-mode dual numbers (one lane per *continuous* coordinate read, 4/8/12/16/24/32
-///   lanes; discrete numbers are constants of the replay) and gives
+///   in forward-mode dual numbers (one lane per *continuous* coordinate read, 4, 8, 10, 12,
+///   16, 24 or 32 lanes; discrete numbers are constants of the replay) and gives
 ///   `d ln L / du = (dL/du) / L`. The value of each dual number is `f64`, its derivative
 ///   lanes `f32` (half the lane arithmetic of `f64` lanes; relative rounding about `1e-7` per
 ///   operation in the derivatives only), replayed with `f64` lanes where an `f32` lane
@@ -207,7 +207,8 @@ impl<'s> DifferentiableMmlt<'s> {
         match n {
             0..=4 => self.dual_lanes::<4>(x, continuous, grad),
             5..=8 => self.dual_lanes::<8>(x, continuous, grad),
-            9..=12 => self.dual_lanes::<12>(x, continuous, grad),
+            9..=10 => self.dual_lanes::<10>(x, continuous, grad),
+            11..=12 => self.dual_lanes::<12>(x, continuous, grad),
             13..=16 => self.dual_lanes::<16>(x, continuous, grad),
             17..=24 => self.dual_lanes::<24>(x, continuous, grad),
             25..=32 => self.dual_lanes::<32>(x, continuous, grad),
