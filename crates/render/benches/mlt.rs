@@ -15,7 +15,8 @@ use mcmc_core::DifferentiableTarget;
 use mcmc_core::{Chain, Mh, NoAdaptation, Target};
 use pss::{KelemenParams, PssState, PssmltProposal, SmallMutation, SmallStep};
 use rand::SeedableRng;
-use render::bdpt::diff::evaluate_strategy;
+use render::autodiff::Lane;
+use render::bdpt::diff::{evaluate_strategy, DiffScene, Dual, Evaluation};
 use render::bdpt::{self, BdptParams, BdptScratch};
 use render::mlt::dr::DrBase;
 use render::mlt::mala::{self, DifferentiableMmlt, GradientMethod, MalaConfig, MalaVariant};
@@ -208,11 +209,69 @@ fn gradient(c: &mut Criterion) {
                 ))
             })
         });
+        // The replay alone in dual numbers with the lanes the default gradient uses (the
+        // smallest of 8 / 12 / 16 that holds the moved coordinates), f64 and f32 lanes: the
+        // breakdown of `value_and_gradient_dual` (f32 lanes) against its f64-lane predecessor.
+        let diff = DiffScene::new(&scene).expect("supported scene");
+        let mask = x.discrete_mask();
+        let replay = DualReplay {
+            diff: &diff,
+            depth,
+            size,
+            heuristic: params.heuristic,
+            values: x.raw_values(),
+            discrete: [mask[0], mask[1], mask[2]],
+        };
+        match moved {
+            0..=8 => replay.bench::<8>(&mut group),
+            9..=10 => replay.bench::<10>(&mut group),
+            11..=12 => replay.bench::<12>(&mut group),
+            _ => replay.bench::<16>(&mut group),
+        }
         let fd = target.with_method(GradientMethod::FiniteDifference);
         group.bench_function("value_and_gradient_fd", |b| {
             b.iter(|| black_box(fd.evaluate_with_grad(&mut x, &mut payload, &mut grad)))
         });
         group.finish();
+    }
+}
+
+/// One path's replay in dual numbers (`DiffScene::evaluate_continuous`), the continuous numbers
+/// of every stream starting at lane 0 (the streams' lanes overlap: the arithmetic per operation
+/// depends on `N` only, so this times the gradient's replay, not its layout).
+struct DualReplay<'a> {
+    diff: &'a DiffScene<'a>,
+    depth: u32,
+    size: Vec2,
+    heuristic: render::bdpt::MisHeuristic,
+    values: &'a [f64],
+    discrete: [u64; 3],
+}
+
+impl DualReplay<'_> {
+    fn run<const N: usize, L: Lane>(&self) -> Evaluation<Dual<N, L>> {
+        self.diff.evaluate_continuous::<Dual<N, L>>(
+            self.depth,
+            self.size,
+            self.heuristic,
+            self.values,
+            PATH_STREAMS,
+            [0; 3],
+            self.discrete,
+            Dual::variable,
+        )
+    }
+
+    fn bench<const N: usize>(
+        &self,
+        group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    ) {
+        group.bench_function(format!("replay_dual{N}_f64_lanes"), |b| {
+            b.iter(|| black_box(self.run::<N, f64>()))
+        });
+        group.bench_function(format!("replay_dual{N}_f32_lanes"), |b| {
+            b.iter(|| black_box(self.run::<N, f32>()))
+        });
     }
 }
 

@@ -1,6 +1,7 @@
 //! Forward-mode automatic differentiation for the differentiable path evaluator
 //! ([`crate::bdpt::diff`]): a scalar trait [`Real`] implemented by `f64` and by the dual number
-//! [`Dual`] (one value and `N` derivative lanes), and the small vector type [`V3`] over it.
+//! [`Dual`] (one value and `N` derivative lanes of `f64` or `f32`, [`Lane`]), and the small
+//! vector type [`V3`] over it.
 //!
 //! Code written once over `T: Real` runs in plain `f64` (the evaluator's reference value, and
 //! the finite differences its gradients are tested against) and in `Dual<N>` (value and
@@ -19,9 +20,11 @@
 //! ```
 
 mod dual;
+mod lane;
 mod real;
 mod vec;
 
 pub use dual::Dual;
+pub use lane::Lane;
 pub use real::Real;
 pub use vec::V3;

@@ -38,6 +38,7 @@ use pss::{Pending, PssState, SmallMutation};
 pub use pss::mala::{MalaChainKernel, MalaParams, MalaVariant};
 
 use super::{MmltTarget, PathPayload, PATH_STREAMS};
+use crate::autodiff::Lane;
 use crate::bdpt::diff::{DiffScene, Dual, Evaluation};
 
 /// How [`DifferentiableMmlt`] computes the gradient of the log luminance.
@@ -143,10 +144,12 @@ thread_local! {
 ///
 /// - [`GradientMethod::Dual`] (default): the f32 evaluator gives the value
 ///   the chain uses; the differentiable evaluator [`crate::bdpt::diff`] replays the same path
-///   in forward-mode dual numbers (one lane per *continuous* coordinate read, 4/8/12/16/24/32
-///   lanes; discrete numbers are constants of the replay) and gives
-///   `d ln L / du = (dL/du) / L`. Where it does not apply it falls back to finite
-///   differences.
+///   in forward-mode dual numbers (one lane per *continuous* coordinate read, 4, 8, 10, 12,
+///   16, 24 or 32 lanes; discrete numbers are constants of the replay) and gives
+///   `d ln L / du = (dL/du) / L`. The value of each dual number is `f64`, its derivative
+///   lanes `f32` (half the lane arithmetic of `f64` lanes; relative rounding about `1e-7` per
+///   operation in the derivatives only), replayed with `f64` lanes where an `f32` lane
+///   overflows. Where the evaluator does not apply it falls back to finite differences.
 /// - [`GradientMethod::FiniteDifference`]: central differences of the f32 evaluator with step
 ///   `h` (one-sided where one side changes the read set or carries no light; 0 where both do),
 ///   `2 d + 1` evaluations per gradient and accuracy about `1e-7 / h` relative.
@@ -204,7 +207,8 @@ impl<'s> DifferentiableMmlt<'s> {
         match n {
             0..=4 => self.dual_lanes::<4>(x, continuous, grad),
             5..=8 => self.dual_lanes::<8>(x, continuous, grad),
-            9..=12 => self.dual_lanes::<12>(x, continuous, grad),
+            9..=10 => self.dual_lanes::<10>(x, continuous, grad),
+            11..=12 => self.dual_lanes::<12>(x, continuous, grad),
             13..=16 => self.dual_lanes::<16>(x, continuous, grad),
             17..=24 => self.dual_lanes::<24>(x, continuous, grad),
             25..=32 => self.dual_lanes::<32>(x, continuous, grad),
@@ -212,21 +216,41 @@ impl<'s> DifferentiableMmlt<'s> {
         }
     }
 
+    /// The gradient in `N` lanes: first with `f32` derivative lanes (half the lane
+    /// arithmetic), and again with `f64` lanes where a lane of the `f32` pass is not finite
+    /// (an intermediate derivative beyond `f32`'s range). Which pass answers is decided by the
+    /// state alone, so the gradient stays one deterministic function of the state.
     fn dual_lanes<const N: usize>(
         &self,
         x: &PssState,
         continuous: [usize; PATH_STREAMS],
         grad: &mut Vec<f64>,
     ) -> bool {
+        match self.dual_pass::<N, f32>(x, continuous, grad) {
+            LanePass::Done(ok) => ok,
+            LanePass::Overflow => matches!(
+                self.dual_pass::<N, f64>(x, continuous, grad),
+                LanePass::Done(true)
+            ),
+        }
+    }
+
+    /// One replay in `Dual<N, L>`: the gradient of `ln L` into `grad`.
+    fn dual_pass<const N: usize, L: Lane>(
+        &self,
+        x: &PssState,
+        continuous: [usize; PATH_STREAMS],
+        grad: &mut Vec<f64>,
+    ) -> LanePass {
         let Some(diff) = &self.diff else {
-            return false;
+            return LanePass::Done(false);
         };
         let (_, params, size) = self.target.parts();
         let counts = x.read_counts();
         let mask = x.discrete_mask();
         let lanes = [0, continuous[0], continuous[0] + continuous[1]];
         let n = lanes[2] + continuous[2];
-        let e = diff.evaluate_continuous::<Dual<N>>(
+        let e = diff.evaluate_continuous::<Dual<N, L>>(
             self.target.depth(),
             size,
             params.heuristic,
@@ -237,22 +261,33 @@ impl<'s> DifferentiableMmlt<'s> {
             Dual::variable,
         );
         let (Evaluation::Contribution { reads, .. }, Some(lum)) = (&e, e.luminance()) else {
-            return false;
+            return LanePass::Done(false);
         };
         if reads[..] != counts[..PATH_STREAMS] || !(lum.v > 0.0 && lum.v.is_finite()) {
-            return false;
+            return LanePass::Done(false);
+        }
+        if lum.d[..n].iter().any(|d| !d.to_f64().is_finite()) {
+            return LanePass::Overflow;
         }
         grad.clear();
         grad.extend(lum.d[..n].iter().map(|d| {
-            let g = d / lum.v;
+            let g = d.to_f64() / lum.v;
             if g.is_finite() {
                 g
             } else {
                 0.0
             }
         }));
-        true
+        LanePass::Done(true)
     }
+}
+
+/// The outcome of one dual-number pass of [`DifferentiableMmlt`].
+enum LanePass {
+    /// A gradient was written (`true`), or the evaluator does not apply (`false`).
+    Done(bool),
+    /// A derivative lane is not finite: retry with wider lanes.
+    Overflow,
 }
 
 /// Per path stream, the number of continuous reads of `x`'s last evaluation.

@@ -208,30 +208,30 @@ impl Ctx<'_> {
         } else {
             camera[t - 1]
         };
-        let qs_minus = (s > 1).then(|| light[s - 2]);
-        let pt_minus = (t > 1).then(|| camera[t - 2]);
+        let qs_minus = (s > 1).then(|| &light[s - 2]);
+        let pt_minus = (t > 1).then(|| &camera[t - 2]);
         pt.delta = false;
         if let Some(q) = qs.as_mut() {
             q.delta = false;
         }
         pt.pdf_rev = match (&qs, &pt_minus) {
-            (Some(q), _) => self.pdf(q, qs_minus.as_ref(), &pt)?,
+            (Some(q), _) => self.pdf(q, qs_minus, &pt)?,
             (None, Some(_)) => T::cst(match pt.light {
                 Some(l) => self.pdf_light_origin(l)?,
                 None => 0.0,
             }),
             (None, None) => T::cst(0.0),
         };
-        let pt_minus_rev = match (&pt_minus, &qs) {
+        let pt_minus_rev = match (pt_minus, &qs) {
             (Some(pm), Some(q)) => Some(self.pdf(&pt, Some(q), pm)?),
             (Some(pm), None) => Some(self.pdf_light(&pt, pm)?),
             _ => None,
         };
         let qs_rev = match &qs {
-            Some(q) => Some(self.pdf(&pt, pt_minus.as_ref(), q)?),
+            Some(q) => Some(self.pdf(&pt, pt_minus, q)?),
             None => None,
         };
-        let qs_minus_rev = match (&qs, &qs_minus) {
+        let qs_minus_rev = match (&qs, qs_minus) {
             (Some(q), Some(qm)) => Some(self.pdf(q, Some(&pt), qm)?),
             _ => None,
         };

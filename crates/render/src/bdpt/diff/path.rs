@@ -218,16 +218,18 @@ impl Ctx<'_> {
             raster.1 * f64::from(image_size.y),
         );
         let blank = Vertex::camera(V3::zero(), V3::from_a(Vec3A::Z), V3::zero(), T::cst(0.0));
-        let mut camera = [blank; MAX_DIFF_VERTICES];
-        let mut light = [blank; MAX_DIFF_VERTICES];
-        if self.camera_subpath(u, raster, t, &mut camera)? != t {
+        // One array for both subpaths (`s + t <= MAX_DIFF_VERTICES`): half the vertices to
+        // initialise, and a vertex of dual numbers is large.
+        let mut vertices = [blank; MAX_DIFF_VERTICES];
+        let (camera, light) = vertices.split_at_mut(t);
+        if self.camera_subpath(u, raster, t, camera)? != t {
             return Err(Stop::Zero);
         }
         let time = camera[0].time;
-        if s != 1 && self.light_subpath(u, time, s, &mut light)? != s {
+        if s != 1 && self.light_subpath(u, time, s, light)? != s {
             return Err(Stop::Zero);
         }
-        let l = self.connect(&mut light, &mut camera, s, t, u, heuristic)?;
+        let l = self.connect(light, camera, s, t, u, heuristic)?;
         Ok((l.scale(n_strategies as f64), s, t))
     }
 }

@@ -35,7 +35,8 @@ impl Ctx<'_> {
         let mut added = 0;
         loop {
             let idx = 1 + added;
-            let prev = path[idx - 1];
+            // Borrowed, not copied: a vertex of dual numbers is large.
+            let prev = &path[idx - 1];
             let ray = prev.spawn_f32(dir);
             let Some(si) = self.scene.intersect(&ray) else {
                 // Environment lights are not restated (the scene check excludes them).
@@ -109,8 +110,9 @@ impl Ctx<'_> {
             if !beta.is_finite() || beta.is_zero() {
                 break;
             }
-            let here = path[idx];
-            path[idx - 1].pdf_rev = here.convert_density(pdf_rev, &path[idx - 1]);
+            let (before, here) = path.split_at_mut(idx);
+            let rev = here[0].convert_density(pdf_rev, &before[idx - 1]);
+            before[idx - 1].pdf_rev = rev;
             dir = wi;
         }
         Ok(added)
