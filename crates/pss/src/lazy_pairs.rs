@@ -46,7 +46,7 @@ use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
 use crate::pairwise::{torus_displacement, PairwiseKelemenParams};
-use crate::state::{Pending, PssState};
+use crate::state::{split_index, Pending, PssState};
 
 /// The laws of the lazy pairwise stages: the first stage's polar Kelemen radii and the
 /// orbital stage's wrapped Cauchy angle (DR paper eq. 9-10), and the streams whose first
@@ -70,9 +70,15 @@ impl LazyPairParams {
     #[inline]
     #[must_use]
     pub fn pair_of(&self, index: usize, streams: usize) -> Option<[usize; 2]> {
-        let stream = index % streams;
+        let (k, stream) = split_index(index, streams);
+        self.pair_at(k, stream, streams)
+    }
+
+    /// [`LazyPairParams::pair_of`] for the `k`-th number of stream `stream`.
+    #[inline]
+    #[must_use]
+    pub fn pair_at(&self, k: usize, stream: usize, streams: usize) -> Option<[usize; 2]> {
         let offset = usize::from(self.fixed_first & (1 << stream) != 0);
-        let k = index / streams;
         if k < offset {
             return None;
         }
