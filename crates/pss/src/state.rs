@@ -666,8 +666,10 @@ impl PssState {
                 }
                 match self.params_pair(i).filter(|_| pairs) {
                     Some([a, b]) if b < other.values.len() && other.stamps[b] == now => {
-                        let first = Some([other.values[a], other.values[b]]);
-                        self.catch_up_pair(i, first);
+                        let first = [other.values[a], other.values[b]];
+                        if !self.orbit_pair_from_first(a, b, stream, first) {
+                            self.catch_up_pair(i, Some(first));
+                        }
                     }
                     _ => {
                         self.get(i);
@@ -675,6 +677,42 @@ impl PssState {
                 }
             }
         }
+    }
+
+    /// The common case of [`PssState::catch_up_pair`] under a [`Pending::Orbit`] on a moved
+    /// stream, for a pair `(a, b)` of `stream` the rejected first-stage candidate read
+    /// (values `first`) and the parent holds up to date (stamped `now - 1`, as it does after
+    /// absorbing that candidate): `z = x + d - R(theta) d` with `d = first - x`, the same
+    /// arithmetic bit for bit, without the catch-up's bookkeeping (nothing is missed or
+    /// observed). Returns false, touching nothing, where that case does not apply.
+    #[inline]
+    fn orbit_pair_from_first(&mut self, a: usize, b: usize, stream: usize, first: [f64; 2]) -> bool {
+        let Pending::Orbit {
+            params,
+            stream_mask,
+            ..
+        } = self.pending
+        else {
+            return false;
+        };
+        let now = self.iteration[stream];
+        if stream_mask & (1 << stream) == 0
+            || b >= self.values.len()
+            || self.stamps[a] != now - 1
+            || self.stamps[b] != now - 1
+        {
+            return false;
+        }
+        let parent = [self.values[a], self.values[b]];
+        let d = [
+            torus_displacement(parent[0], first[0]),
+            torus_displacement(parent[1], first[1]),
+        ];
+        let rotation = params.rotation(&mut PairDraws::new(self.key, a as u64));
+        let m = params.orbit_displacement(d, rotation);
+        self.store_stored(a, stream, crate::mutation::wrap(parent[0] + m[0]));
+        self.store_stored(b, stream, crate::mutation::wrap(parent[1] + m[1]));
+        true
     }
 
     /// The pair holding coordinate `index` under a pairwise pending mutation.
