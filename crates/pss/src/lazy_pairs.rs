@@ -486,7 +486,8 @@ mod tests {
     fn step_radius_and_direction_from_one_point_have_the_law() {
         let p = LazyPairParams::default();
         let ratio = p.log_radius_ratio();
-        let report = step_law_report(|i| p.step_displacement_with(ratio, &mut PairDraws::new(i, 7)));
+        let report =
+            step_law_report(|i| p.step_displacement_with(ratio, &mut PairDraws::new(i, 7)));
         report.assert_passes("step displacement", 2);
         let wrong = step_law_report(|i| {
             let mut draws = PairDraws::new(i, 7);
@@ -494,7 +495,10 @@ mod tests {
             let r = p.radius_with(ratio, 0.5 * (x + 1.0));
             [r * (x * x - y * y) / q, r * 2.0 * x * y / q]
         });
-        assert!(wrong.rejects(sidak_alpha(ALPHA, 2)), "control passed: {wrong}");
+        assert!(
+            wrong.rejects(sidak_alpha(ALPHA, 2)),
+            "control passed: {wrong}"
+        );
     }
 
     #[test]

@@ -686,7 +686,13 @@ impl PssState {
     /// arithmetic bit for bit, without the catch-up's bookkeeping (nothing is missed or
     /// observed). Returns false, touching nothing, where that case does not apply.
     #[inline]
-    fn orbit_pair_from_first(&mut self, a: usize, b: usize, stream: usize, first: [f64; 2]) -> bool {
+    fn orbit_pair_from_first(
+        &mut self,
+        a: usize,
+        b: usize,
+        stream: usize,
+        first: [f64; 2],
+    ) -> bool {
         let Pending::Orbit {
             params,
             stream_mask,
