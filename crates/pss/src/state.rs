@@ -551,7 +551,7 @@ impl PssState {
     /// rejected first-stage candidate's values of the pair if it read the pair (its parent,
     /// this state's parent, then holds the pair up to date: `absorb_rejected` stored what
     /// the candidate drew).
-    #[inline(never)]
+    #[cold]
     fn catch_up_pair(&mut self, index: usize, first_pair: Option<[f64; 2]>) -> f64 {
         let streams = self.streams;
         let (k, stream) = split_index(index, streams);
