@@ -46,7 +46,7 @@ use mcmc_core::{Proposal, Proposed};
 use rand::{Rng, RngExt};
 
 use crate::pairwise::{torus_displacement, PairwiseKelemenParams};
-use crate::state::{Pending, PssState};
+use crate::state::{split_index, Pending, PssState};
 
 /// The laws of the lazy pairwise stages: the first stage's polar Kelemen radii and the
 /// orbital stage's wrapped Cauchy angle (DR paper eq. 9-10), and the streams whose first
@@ -70,9 +70,15 @@ impl LazyPairParams {
     #[inline]
     #[must_use]
     pub fn pair_of(&self, index: usize, streams: usize) -> Option<[usize; 2]> {
-        let stream = index % streams;
+        let (k, stream) = split_index(index, streams);
+        self.pair_at(k, stream, streams)
+    }
+
+    /// [`LazyPairParams::pair_of`] for the `k`-th number of stream `stream`.
+    #[inline]
+    #[must_use]
+    pub fn pair_at(&self, k: usize, stream: usize, streams: usize) -> Option<[usize; 2]> {
         let offset = usize::from(self.fixed_first & (1 << stream) != 0);
-        let k = index / streams;
         if k < offset {
             return None;
         }
@@ -102,7 +108,8 @@ impl LazyPairParams {
     }
 
     /// The first-stage displacement of a pair drawn from `draws`: `r (cos phi, sin phi)`, `r`
-    /// log-uniform (eq. 9), the direction uniform on the circle ([`PairDraws::direction`]).
+    /// log-uniform (eq. 9), the direction uniform on the circle and independent of `r`: both
+    /// from one point of the disc ([`PairDraws::direction_and_uniform`]).
     #[inline]
     #[must_use]
     pub fn step_displacement(&self, draws: &mut PairDraws) -> [f64; 2] {
@@ -117,7 +124,8 @@ impl LazyPairParams {
     }
 
     /// The radius `r_max exp(-u ln(r_max / r_min))` of eq. 9 ([`PairwiseKelemenParams::radius`])
-    /// given `log_ratio` = [`LazyPairParams::log_radius_ratio`].
+    /// given `log_ratio` = [`LazyPairParams::log_radius_ratio`]; `u` uniform on `[0, 1)` or
+    /// on `(0, 1]` gives the same law.
     #[inline]
     fn radius_with(&self, log_ratio: f64, u: f64) -> f64 {
         self.step.r_max * (-u * log_ratio).exp()
@@ -127,8 +135,8 @@ impl LazyPairParams {
     #[inline]
     #[must_use]
     pub fn step_displacement_with(&self, log_ratio: f64, draws: &mut PairDraws) -> [f64; 2] {
-        let r = self.radius_with(log_ratio, draws.uniform());
-        let [cos, sin] = draws.direction();
+        let ([cos, sin], u) = draws.direction_and_uniform();
+        let r = self.radius_with(log_ratio, u);
         [r * cos, r * sin]
     }
 
@@ -156,16 +164,17 @@ impl LazyPairParams {
     /// One composite step `d - R(theta) d` with `d` a first-stage step, drawn by its law
     /// rather than by its parts: for `d = r e^(i phi)`, `d - R(theta) d = r (1 - e^(i theta))
     /// e^(i phi)` has length `2 r |sin(theta / 2)|` and, `phi` being uniform and independent
-    /// of `r` and `theta`, a uniform direction independent of its length. So: a radius, a
-    /// half-angle sine ([`WrappedCauchy::half_angle_sine_of_point`]) and a direction.
+    /// of `r` and `theta`, a uniform direction independent of its length. So: a radius and a
+    /// direction (one disc point, [`PairDraws::direction_and_uniform`]) and a half-angle sine
+    /// ([`WrappedCauchy::half_angle_sine_of_point`] of another).
     /// `log_ratio`: [`LazyPairParams::log_radius_ratio`].
     #[inline]
     #[must_use]
     pub fn composite_step(&self, log_ratio: f64, draws: &mut PairDraws) -> [f64; 2] {
-        let r = self.radius_with(log_ratio, draws.uniform());
+        let ([cos, sin], u) = draws.direction_and_uniform();
+        let r = self.radius_with(log_ratio, u);
         let [x, y, _] = draws.disc_point();
         let length = 2.0 * r * self.angle.half_angle_sine_of_point(x, y);
-        let [cos, sin] = draws.direction();
         [length * cos, length * sin]
     }
 
@@ -199,9 +208,14 @@ impl LazyPairParams {
 
 /// The random numbers of one pair of one candidate: a sequence of uniforms that is a pure
 /// function of `(key, a)` (the candidate's noise key and the pair's first interleaved index),
-/// drawn in order (SplitMix64 from a hashed start: one hash per uniform, where
+/// drawn in order (SplitMix64 from a hashed start: one hash to start, one per uniform, where
 /// [`crate::noise::uniform`] costs three). Different keys or pairs give independent
 /// sequences, and the result does not depend on the order in which pairs are read.
+///
+/// The pair moves sit on the path sampler's critical path (a path reads a number and at once
+/// traces with it), so the draws are built for latency: one hash to start a sequence, and
+/// points of the disc used whole, their angle for a direction without a square root and
+/// their squared radius as a second uniform ([`PairDraws::direction_and_uniform`]).
 #[derive(Clone, Copy, Debug)]
 pub struct PairDraws {
     state: u64,
@@ -221,8 +235,10 @@ impl PairDraws {
     #[inline]
     #[must_use]
     pub fn new(key: u64, a: u64) -> Self {
+        // `a * GOLDEN` is injective in `a` (an odd multiplier), so distinct pairs of one key
+        // start from distinct inputs, which the bijective `mix64` scatters.
         Self {
-            state: mix64(key ^ mix64(a.wrapping_mul(GOLDEN) ^ PAIR_SALT)),
+            state: mix64(key ^ a.wrapping_mul(GOLDEN) ^ PAIR_SALT),
         }
     }
 
@@ -233,18 +249,18 @@ impl PairDraws {
         (mix64(self.state) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
-    /// A point `[x, y, x^2 + y^2]` uniform on the unit disc minus a tiny disc around 0 (the
-    /// first point of the square `[-1, 1)^2` inside it; about 1.27 points on average), so
-    /// its angle is uniform on the circle. After 32 rejected points (probability below
-    /// `1e-21`) the unit point at angle `2 pi u` of a further uniform: its angle is uniform
-    /// too, which is all the callers use.
+    /// A point `[x, y, q = x^2 + y^2]` uniform on the unit disc without its centre (the first
+    /// point of the square `[-1, 1)^2` inside it; about 1.27 points on average): its angle
+    /// is uniform on the circle, `q` is uniform on `(0, 1]`, and the two are independent.
+    /// After 32 rejected points (probability below `1e-21`) the point `sqrt(v) e^(2 pi i u)`
+    /// of two further uniforms, which has the same law.
     #[inline]
     pub fn disc_point(&mut self) -> [f64; 3] {
         for _ in 0..DISC_TRIES {
             let x = 2.0 * self.uniform() - 1.0;
             let y = 2.0 * self.uniform() - 1.0;
             let q = x * x + y * y;
-            if q <= 1.0 && q > 1e-12 {
+            if q <= 1.0 && q > 0.0 {
                 return [x, y, q];
             }
         }
@@ -255,16 +271,26 @@ impl PairDraws {
     #[inline(never)]
     fn disc_fallback(&mut self) -> [f64; 3] {
         let (sin, cos) = (std::f64::consts::TAU * self.uniform()).sin_cos();
-        [cos, sin, 1.0]
+        let q = 1.0 - self.uniform();
+        let r = q.sqrt();
+        [r * cos, r * sin, q]
     }
 
-    /// A direction uniform on the unit circle: a [`PairDraws::disc_point`], normalised (no
-    /// trigonometry).
+    /// A direction uniform on the unit circle and a uniform on `(0, 1]` independent of it,
+    /// from one [`PairDraws::disc_point`] `(x, y, q)`: the direction at twice the point's
+    /// angle, `((x^2 - y^2) / q, 2 x y / q)` (doubling an angle uniform on the circle leaves
+    /// it uniform; von Neumann's construction, no square root, no trigonometry), and `q`.
+    #[inline]
+    pub fn direction_and_uniform(&mut self) -> ([f64; 2], f64) {
+        let [x, y, q] = self.disc_point();
+        let inv = 1.0 / q;
+        ([(x * x - y * y) * inv, 2.0 * x * y * inv], q)
+    }
+
+    /// A direction uniform on the unit circle ([`PairDraws::direction_and_uniform`]).
     #[inline]
     pub fn direction(&mut self) -> [f64; 2] {
-        let [x, y, q] = self.disc_point();
-        let inv = 1.0 / q.sqrt();
-        [x * inv, y * inv]
+        self.direction_and_uniform().0
     }
 }
 
@@ -406,6 +432,7 @@ impl ConditionalProposal<PssState> for LazyOrbital {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mcmc_core::testing::{chi_square_test, sidak_alpha, ChiSquareReport, ALPHA};
     use std::f64::consts::PI;
 
     #[test]
@@ -422,6 +449,56 @@ mod tests {
         for b in bins {
             assert!((i64::from(b) - 10_000).abs() < 600, "{bins:?}");
         }
+    }
+
+    /// Joint chi-square of a sampler's displacements against eq. 9's law: `v = ln(r_max / r)
+    /// / ln(r_max / r_min)` uniform, the angle uniform, the two independent (8 x 8 equal
+    /// bins; a radius outside the support counts as impossible).
+    fn step_law_report(mut draw: impl FnMut(u64) -> [f64; 2]) -> ChiSquareReport {
+        let p = LazyPairParams::default();
+        let ratio = p.log_radius_ratio();
+        let mut bins = [0u64; 64];
+        let mut outside = 0;
+        for i in 0..200_000 {
+            let [dx, dy] = draw(i);
+            let v = (p.step.r_max / dx.hypot(dy)).ln() / ratio;
+            if !(-1e-9..=1.0 + 1e-9).contains(&v) {
+                outside += 1;
+                continue;
+            }
+            let t = (dy.atan2(dx) + PI) / (2.0 * PI);
+            let (a, b) = ((v * 8.0) as usize, (t * 8.0) as usize);
+            bins[a.min(7) * 8 + b.min(7)] += 1;
+        }
+        let mut report = chi_square_test(&bins, &[1.0 / 64.0; 64], 5.0);
+        if outside > 0 {
+            report.statistic = f64::INFINITY;
+            report.p_value = 0.0;
+        }
+        report
+    }
+
+    /// The step's radius and direction come from one disc point (its squared radius and
+    /// its doubled angle): the law of eq. 9, radius and direction independent. Negative
+    /// control: the radius from the same point's abscissa, which depends on the angle,
+    /// fails the same check.
+    #[test]
+    fn step_radius_and_direction_from_one_point_have_the_law() {
+        let p = LazyPairParams::default();
+        let ratio = p.log_radius_ratio();
+        let report =
+            step_law_report(|i| p.step_displacement_with(ratio, &mut PairDraws::new(i, 7)));
+        report.assert_passes("step displacement", 2);
+        let wrong = step_law_report(|i| {
+            let mut draws = PairDraws::new(i, 7);
+            let [x, y, q] = draws.disc_point();
+            let r = p.radius_with(ratio, 0.5 * (x + 1.0));
+            [r * (x * x - y * y) / q, r * 2.0 * x * y / q]
+        });
+        assert!(
+            wrong.rejects(sidak_alpha(ALPHA, 2)),
+            "control passed: {wrong}"
+        );
     }
 
     #[test]

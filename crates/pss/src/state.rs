@@ -133,6 +133,20 @@ pub struct PssState {
     stream: usize,
 }
 
+/// `(k, s)` with `index = s + streams * k`, `s < streams` (interleaved numbering): stream
+/// `s`'s `k`-th number. `streams` is 1..=4 ([`MAX_STREAMS`]), so each case divides by a
+/// constant (a multiply, not a hardware division on the pair moves' critical path).
+#[inline]
+pub(crate) fn split_index(index: usize, streams: usize) -> (usize, usize) {
+    match streams {
+        1 => (index, 0),
+        2 => (index >> 1, index & 1),
+        3 => (index / 3, index % 3),
+        4 => (index >> 2, index & 3),
+        _ => (index / streams, index % streams),
+    }
+}
+
 /// Reads per stream whose discrete tag is recorded (later reads count as continuous).
 pub const TAGGED_READS: usize = 64;
 
@@ -431,7 +445,7 @@ impl PssState {
             return self.values[index];
         }
         if matches!(self.pending, Pending::Pairs(_) | Pending::Orbit { .. }) {
-            return self.catch_up_pair(index);
+            return self.catch_up_pair(index, None);
         }
         let value = self.catch_up(index, stream, now);
         self.store(index, value);
@@ -533,19 +547,14 @@ impl PssState {
 
     /// Catches up and moves the pair holding coordinate `index` under a pending
     /// [`Pending::Pairs`] or [`Pending::Orbit`] (see [`crate::lazy_pairs`] for why this is
-    /// exact); returns coordinate `index`.
+    /// exact); returns coordinate `index`. `first_pair`, under a [`Pending::Orbit`]: the
+    /// rejected first-stage candidate's values of the pair if it read the pair (its parent,
+    /// this state's parent, then holds the pair up to date: `absorb_rejected` stored what
+    /// the candidate drew).
     #[cold]
-    fn catch_up_pair(&mut self, index: usize) -> f64 {
-        self.catch_up_pair_given(index, None)
-    }
-
-    /// [`PssState::catch_up_pair`], given under a [`Pending::Orbit`] the rejected first-stage
-    /// candidate's values of the pair if it read the pair (`first_pair`; its parent, this
-    /// state's parent, then holds the pair up to date: `absorb_rejected` stored what the
-    /// candidate drew).
-    fn catch_up_pair_given(&mut self, index: usize, first_pair: Option<[f64; 2]>) -> f64 {
+    fn catch_up_pair(&mut self, index: usize, first_pair: Option<[f64; 2]>) -> f64 {
         let streams = self.streams;
-        let stream = index % streams;
+        let (k, stream) = split_index(index, streams);
         let (params, moved) = match self.pending {
             Pending::Pairs(params) => (params, true),
             Pending::Orbit {
@@ -557,7 +566,7 @@ impl PssState {
         };
         let now = self.iteration[stream];
         let parent_now = now - u64::from(moved);
-        let Some(pair) = params.pair_of(index, streams) else {
+        let Some(pair) = params.pair_at(k, stream, streams) else {
             // A kept first number: only large steps renew it.
             let stamp = self.stamps[index];
             let value = if stamp == NEVER || stamp < self.last_large[stream] {
@@ -657,8 +666,10 @@ impl PssState {
                 }
                 match self.params_pair(i).filter(|_| pairs) {
                     Some([a, b]) if b < other.values.len() && other.stamps[b] == now => {
-                        let first = Some([other.values[a], other.values[b]]);
-                        self.catch_up_pair_given(i, first);
+                        let first = [other.values[a], other.values[b]];
+                        if !self.orbit_pair_from_first(a, b, stream, first) {
+                            self.catch_up_pair(i, Some(first));
+                        }
                     }
                     _ => {
                         self.get(i);
@@ -666,6 +677,48 @@ impl PssState {
                 }
             }
         }
+    }
+
+    /// The common case of [`PssState::catch_up_pair`] under a [`Pending::Orbit`] on a moved
+    /// stream, for a pair `(a, b)` of `stream` the rejected first-stage candidate read
+    /// (values `first`) and the parent holds up to date (stamped `now - 1`, as it does after
+    /// absorbing that candidate): `z = x + d - R(theta) d` with `d = first - x`, the same
+    /// arithmetic bit for bit, without the catch-up's bookkeeping (nothing is missed or
+    /// observed). Returns false, touching nothing, where that case does not apply.
+    #[inline]
+    fn orbit_pair_from_first(
+        &mut self,
+        a: usize,
+        b: usize,
+        stream: usize,
+        first: [f64; 2],
+    ) -> bool {
+        let Pending::Orbit {
+            params,
+            stream_mask,
+            ..
+        } = self.pending
+        else {
+            return false;
+        };
+        let now = self.iteration[stream];
+        if stream_mask & (1 << stream) == 0
+            || b >= self.values.len()
+            || self.stamps[a] != now - 1
+            || self.stamps[b] != now - 1
+        {
+            return false;
+        }
+        let parent = [self.values[a], self.values[b]];
+        let d = [
+            torus_displacement(parent[0], first[0]),
+            torus_displacement(parent[1], first[1]),
+        ];
+        let rotation = params.rotation(&mut PairDraws::new(self.key, a as u64));
+        let m = params.orbit_displacement(d, rotation);
+        self.store_stored(a, stream, crate::mutation::wrap(parent[0] + m[0]));
+        self.store_stored(b, stream, crate::mutation::wrap(parent[1] + m[1]));
+        true
     }
 
     /// The pair holding coordinate `index` under a pairwise pending mutation.
