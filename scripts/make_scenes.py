@@ -708,6 +708,38 @@ def scene_glossy_highlight():
     return s
 
 
+THIN_EYE = (0.0, 0.4, 2.0)
+THIN_STRIP_CENTRE = (0.0, 0.55, -1.3)
+
+
+def thin_strip(s, eye, sc):
+    """The thin scenes' strip: 1.4 m x 2 mm of white diffuse along x centred at `sc`, tilted to
+    face the point of a mirror 1 cm above the floor that reflects it into a camera at `eye`;
+    returns that mirror point."""
+    mirror_eye = (eye[0], 2 * 0.01 - eye[1], eye[2])
+    tt = (sc[1] - 0.01) / (sc[1] - mirror_eye[1])
+    hit = add(sc, mul(sub(mirror_eye, sc), tt))
+    nrm = normalize(sub(hit, sc))
+    across = normalize(cross(nrm, (1.0, 0.0, 0.0)))
+    hl, hw = 0.7, 0.001
+    corners = [add(sc, add(mul((1.0, 0.0, 0.0), sx * hl), mul(across, sy * hw)))
+               for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    s.mesh("strip", quad(*corners, facing=nrm), "strip")
+    return hit
+
+
+def thin_lamp(s, sc):
+    """The thin scenes' lamp: a 1.5 m x 8 cm panel below and in front of the strip at `sc`,
+    facing up at it."""
+    lc = add(sc, (0.0, -0.25, 0.25))
+    ln = normalize(sub(sc, lc))
+    lacross = normalize(cross(ln, (1.0, 0.0, 0.0)))
+    ll, lw = 0.75, 0.04
+    lcorners = [add(lc, add(mul((1.0, 0.0, 0.0), sx * ll), mul(lacross, sy * lw)))
+                for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    s.mesh("lamp", quad(*lcorners, facing=ln), "lamp")
+
+
 def scene_thin_highlight():
     s = Scene("thin-highlight", "A thin glossy highlight spanning many pixels, reached only by paths of two or more "
                                 "bounces: a low-roughness metal plate seen at a grazing angle mirrors a long, thin, "
@@ -727,26 +759,11 @@ def scene_thin_highlight():
     s.mesh("block", box((0.55, 0.1 + 0.01, -0.35), (0.2, 0.2, 0.2), rot_deg=-20.0, bottom=True), "block")
     # the strip: 1.4 m x 2 mm of white diffuse, along x, tilted to face the point of the plate that
     # mirrors it into the camera; the camera sees it only in the plate (two bounces to a light)
-    eye = (0.0, 0.4, 2.0)
-    sc = (0.0, 0.55, -1.3)
-    mirror_eye = (eye[0], 2 * 0.01 - eye[1], eye[2])
-    tt = (sc[1] - 0.01) / (sc[1] - mirror_eye[1])
-    hit = add(sc, mul(sub(mirror_eye, sc), tt))
-    nrm = normalize(sub(hit, sc))
-    across = normalize(cross(nrm, (1.0, 0.0, 0.0)))
-    hl, hw = 0.7, 0.001
-    corners = [add(sc, add(mul((1.0, 0.0, 0.0), sx * hl), mul(across, sy * hw)))
-               for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-    s.mesh("strip", quad(*corners, facing=nrm), "strip")
+    eye, sc = THIN_EYE, THIN_STRIP_CENTRE
+    thin_strip(s, eye, sc)
     # the lamp: a 1.5 m x 8 cm panel below and in front of the strip, facing up at it, under
     # the strip-to-plate rays; the camera sees only its back, the plate not its face
-    lc = add(sc, (0.0, -0.25, 0.25))
-    ln = normalize(sub(sc, lc))
-    lacross = normalize(cross(ln, (1.0, 0.0, 0.0)))
-    ll, lw = 0.75, 0.04
-    lcorners = [add(lc, add(mul((1.0, 0.0, 0.0), sx * ll), mul(lacross, sy * lw)))
-                for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-    s.mesh("lamp", quad(*lcorners, facing=ln), "lamp")
+    thin_lamp(s, sc)
     # a dim, large fill panel overhead behind the camera lights the surroundings diffusely
     s.mesh("fill", quad((-2, 3, 0.5), (2, 3, 0.5), (2, 3, 3.0), (-2, 3, 3.0), facing=(0, -1, 0)), "fill")
     s.camera(eye, (0.0, 0.08, -0.3), 35.0)
@@ -769,28 +786,13 @@ def scene_thin_bar():
     s.mesh("block", box((0.55, 0.1 + 0.01, -0.35), (0.2, 0.2, 0.2), rot_deg=-20.0, bottom=True), "block")
     # the strip and lamp as in thin-highlight: 1.4 m x 2 mm of white diffuse along x, tilted to face
     # the point of the floor-level mirror that reflects it into the camera
-    eye = (0.0, 0.4, 2.0)
-    sc = (0.0, 0.55, -1.3)
-    mirror_eye = (eye[0], 2 * 0.01 - eye[1], eye[2])
-    tt = (sc[1] - 0.01) / (sc[1] - mirror_eye[1])
-    hit = add(sc, mul(sub(mirror_eye, sc), tt))
-    nrm = normalize(sub(hit, sc))
-    across = normalize(cross(nrm, (1.0, 0.0, 0.0)))
-    hl, hw = 0.7, 0.001
-    corners = [add(sc, add(mul((1.0, 0.0, 0.0), sx * hl), mul(across, sy * hw)))
-               for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-    s.mesh("strip", quad(*corners, facing=nrm), "strip")
+    eye, sc = THIN_EYE, THIN_STRIP_CENTRE
+    hit = thin_strip(s, eye, sc)
     # the bar: 1.6 m long, 20 cm deep and 1 cm tall, centred on the mirror point; around it the
     # camera sees the floor, and the bar mirrors the open sky behind the strip (black: no backdrop)
     # and the strip, so no broad glossy band surrounds the highlight
     s.mesh("bar", box((0.0, 0.005, hit[2]), (1.6, 0.01, 0.2), bottom=False), "bar")
-    lc = add(sc, (0.0, -0.25, 0.25))
-    ln = normalize(sub(sc, lc))
-    lacross = normalize(cross(ln, (1.0, 0.0, 0.0)))
-    ll, lw = 0.75, 0.04
-    lcorners = [add(lc, add(mul((1.0, 0.0, 0.0), sx * ll), mul(lacross, sy * lw)))
-                for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-    s.mesh("lamp", quad(*lcorners, facing=ln), "lamp")
+    thin_lamp(s, sc)
     s.mesh("fill", quad((-2, 3, 0.5), (2, 3, 0.5), (2, 3, 3.0), (-2, 3, 3.0), facing=(0, -1, 0)), "fill")
     s.camera(eye, (0.0, 0.08, -0.3), 35.0)
     return s
