@@ -14,27 +14,17 @@
 //! of the states must agree within 0.01; the stale-gradient control differs by 0.3..7 on
 //! every comparable state measured and must exceed 0.1 on at least 90 % of them.
 
-use std::path::Path;
+mod common;
 
 use mcmc_core::{DifferentiableTarget, Target};
 use pss::langevin::moved_indices;
-use pss::PssState;
 use render::bdpt::BdptParams;
 use render::mlt::mala::{DifferentiableMmlt, GradientMethod};
-use render::mlt::{MmltTarget, PATH_STREAMS};
+use render::mlt::MmltTarget;
 use render::scene::Scene;
 
 fn scenes() -> Vec<(String, Scene)> {
-    let mut v = vec![("cornell".to_owned(), Scene::cornell_box(32, 32))];
-    for name in ["glossy-highlight", "motion-blur", "caustic-pool"] {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes")
-            .join(format!("{name}.gltf"));
-        let mut s = Scene::load(&path).expect("bundled scene");
-        s.set_resolution(32, 32);
-        v.push((name.to_owned(), s));
-    }
-    v
+    common::gradient::gradient_scenes(32)
 }
 
 #[test]
@@ -55,17 +45,8 @@ fn finite_difference_gradients_are_consistent_on_bundled_scenes() {
                 DifferentiableMmlt::new(base, 2.5e-4).with_method(GradientMethod::FiniteDifference);
             let dual = DifferentiableMmlt::new(base, 1e-4);
             let mut payload = Default::default();
-            let mut found = 0;
-            for key in 0..20_000u64 {
-                if found == 4 {
-                    break;
-                }
-                let mut x = PssState::new(PATH_STREAMS, key);
+            for (key, mut x) in common::gradient::finite_states(&base).take(4) {
                 let value = base.evaluate(&mut x, &mut payload);
-                if !value.is_finite() {
-                    continue;
-                }
-                found += 1;
                 let (mut g1, mut g2) = (Vec::new(), Vec::new());
                 let v1 = coarse.evaluate_with_grad(&mut x, &mut payload, &mut g1);
                 let v2 = fine.evaluate_with_grad(&mut x, &mut payload, &mut g2);
@@ -85,10 +66,10 @@ fn finite_difference_gradients_are_consistent_on_bundled_scenes() {
                     value
                 );
                 assert_eq!(gd.len(), idx.len(), "{name}: dual gradient dimension");
-                if norm_relative_difference(&gd, &g2) < 0.01 {
+                if common::gradient::norm_relative_difference(&gd, &g2) < 0.01 {
                     dual_agree += 1;
                 }
-                let m = norm_relative_difference(&g1, &g2);
+                let m = common::gradient::norm_relative_difference(&g1, &g2);
                 if m < 0.01 {
                     agree += 1;
                 } else {
@@ -98,7 +79,7 @@ fn finite_difference_gradients_are_consistent_on_bundled_scenes() {
                 // dimension mismatch is caught by the kernel itself).
                 if previous.len() == g2.len() {
                     comparable += 1;
-                    if norm_relative_difference(&previous, &g2) > 0.1 {
+                    if common::gradient::norm_relative_difference(&previous, &g2) > 0.1 {
                         control_detected += 1;
                     }
                 }
@@ -125,16 +106,4 @@ fn finite_difference_gradients_are_consistent_on_bundled_scenes() {
         control_detected * 10 >= comparable * 9,
         "the stale gradient should disagree on most states"
     );
-}
-
-/// `|a - b| / (|b| + 1)` in the Euclidean norm.
-fn norm_relative_difference(a: &[f64], b: &[f64]) -> f64 {
-    let d: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt();
-    let n: f64 = b.iter().map(|y| y * y).sum::<f64>().sqrt();
-    d / (n + 1.0)
 }

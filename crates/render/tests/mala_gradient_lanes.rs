@@ -11,43 +11,21 @@
 //! mapping (every coordinate one lane off, as a caller whose prefix sums started at 1
 //! would get) must differ by more than `1e-2` on at least 90 % of the states.
 
-use std::path::Path;
+mod common;
 
 use glam::Vec2;
-use mcmc_core::{DifferentiableTarget, Target};
+use mcmc_core::DifferentiableTarget;
 use pss::PssState;
 use render::bdpt::diff::{DiffScene, Dual, Evaluation};
 use render::bdpt::BdptParams;
-use render::mlt::mala::DifferentiableMmlt;
+use render::mlt::mala::{continuous_counts, DifferentiableMmlt};
 use render::mlt::{MmltTarget, PATH_STREAMS};
 use render::scene::Scene;
 
 const SIZE: u32 = 32;
 
 fn scenes() -> Vec<(String, Scene)> {
-    let mut v = vec![("cornell".to_owned(), Scene::cornell_box(SIZE, SIZE))];
-    for name in ["glossy-highlight", "motion-blur", "caustic-pool"] {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes")
-            .join(format!("{name}.gltf"));
-        let mut s = Scene::load(&path).expect("bundled scene");
-        s.set_resolution(SIZE, SIZE);
-        v.push((name.to_owned(), s));
-    }
-    v
-}
-
-/// Continuous reads per path stream of `x`'s last evaluation.
-fn continuous_counts(x: &PssState) -> [usize; 3] {
-    let (counts, mask) = (x.read_counts(), x.discrete_mask());
-    std::array::from_fn(|s| {
-        let below = if counts[s] >= 64 {
-            u64::MAX
-        } else {
-            (1u64 << counts[s]) - 1
-        };
-        counts[s] - (mask[s] & below).count_ones() as usize
-    })
+    common::gradient::gradient_scenes(SIZE)
 }
 
 /// The gradient of `ln L` by the `f64`-lane replay, with the streams' first lanes at `lanes`
@@ -76,18 +54,6 @@ fn reference(
     (lum.v > 0.0).then(|| lum.d[..n].iter().map(|d| d / lum.v).collect())
 }
 
-/// `|a - b| / (|b| + 1)` in the Euclidean norm.
-fn norm_relative_difference(a: &[f64], b: &[f64]) -> f64 {
-    let d: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt();
-    let n: f64 = b.iter().map(|y| y * y).sum::<f64>().sqrt();
-    d / (n + 1.0)
-}
-
 #[test]
 fn f32_lane_gradient_matches_the_f64_lane_replay() {
     let params = BdptParams::default();
@@ -98,22 +64,13 @@ fn f32_lane_gradient_matches_the_f64_lane_replay() {
             let base = MmltTarget::all_depths(&scene, params, SIZE, SIZE)[depth as usize];
             let target = DifferentiableMmlt::new(base, 1e-4);
             let mut payload = Default::default();
-            let mut found = 0;
-            for key in 0..20_000u64 {
-                if found == 4 {
-                    break;
-                }
-                let mut x = PssState::new(PATH_STREAMS, key);
-                if !base.evaluate(&mut x, &mut payload).is_finite() {
-                    continue;
-                }
+            let lit = common::gradient::finite_states(&base).filter_map(|(key, x)| {
                 let c = continuous_counts(&x);
                 let n = c.iter().sum::<usize>();
-                let lanes = [0, c[0], c[0] + c[1]];
-                let Some(g64) = reference(&diff, depth, &x, lanes, n) else {
-                    continue;
-                };
-                found += 1;
+                let g64 = reference(&diff, depth, &x, [0, c[0], c[0] + c[1]], n)?;
+                Some((key, x, c, n, g64))
+            });
+            for (key, mut x, c, n, g64) in lit.take(4) {
                 let mut g = Vec::new();
                 target.evaluate_with_grad(&mut x, &mut payload, &mut g);
                 assert_eq!(
@@ -121,7 +78,7 @@ fn f32_lane_gradient_matches_the_f64_lane_replay() {
                     n,
                     "{name} depth {depth}: one entry per moved coordinate"
                 );
-                let m = norm_relative_difference(&g, &g64);
+                let m = common::gradient::norm_relative_difference(&g, &g64);
                 assert!(
                     m < 1e-4,
                     "{name} depth {depth} key {key}: f32 lanes differ by {m:e}\n{g:?}\n{g64:?}"
@@ -130,7 +87,7 @@ fn f32_lane_gradient_matches_the_f64_lane_replay() {
                 // Negative control: every lane one off (prefix sums starting at 1).
                 let shifted = [1, c[0] + 1, c[0] + c[1] + 1];
                 let wrong = reference(&diff, depth, &x, shifted, n).expect("same path");
-                if norm_relative_difference(&wrong, &g64) > 1e-2 {
+                if common::gradient::norm_relative_difference(&wrong, &g64) > 1e-2 {
                     control_detected += 1;
                 }
                 checked += 1;

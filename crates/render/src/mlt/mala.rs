@@ -290,8 +290,11 @@ enum LanePass {
     Overflow,
 }
 
-/// Per path stream, the number of continuous reads of `x`'s last evaluation.
-fn continuous_counts(x: &PssState) -> [usize; PATH_STREAMS] {
+/// Per path stream, the number of continuous reads of `x`'s last evaluation (the read
+/// counts less the reads tagged discrete): the dual lanes the gradient of `x` needs per
+/// stream.
+#[must_use]
+pub fn continuous_counts(x: &PssState) -> [usize; PATH_STREAMS] {
     let counts = x.read_counts();
     let mask = x.discrete_mask();
     std::array::from_fn(|s| {

@@ -2,6 +2,7 @@
 #![allow(dead_code, unreachable_pub)]
 
 pub mod coverage;
+pub mod gradient;
 pub mod stats;
 
 use glam::{Vec2, Vec3, Vec3A};
