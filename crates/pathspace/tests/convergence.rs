@@ -16,9 +16,8 @@ use mcmc_core::testing::MhWithoutHastings;
 use mcmc_core::{Chain, Kernel, Mh, NoAdaptation, Proposal, Proposed};
 use pathspace::analytic::AnalyticScene;
 use pathspace::{
-    ra_mixture, BidirectionalMutation, BidirectionalParams, FixedScale, IndependenceMutation,
-    IndependentSampler, Path, PathTarget, Perturbation, PerturbationKind, ScaleSource,
-    UnidirectionalParams, UnidirectionalSampler,
+    ra_mixture, FixedScale, IndependenceMutation, IndependentSampler, Path, PathTarget,
+    Perturbation, PerturbationKind, ScaleSource, UnidirectionalParams, UnidirectionalSampler,
 };
 use rand::{Rng, RngExt};
 
@@ -149,14 +148,7 @@ fn multi_chain_mixture_with_jumping_sigma_converges() {
 #[test]
 fn bidirectional_converges() {
     let scene = leak(furnace());
-    let bidir = BidirectionalMutation::new(
-        scene,
-        BidirectionalParams {
-            max_segments: SEGMENTS,
-            ..BidirectionalParams::default()
-        },
-    )
-    .unwrap();
+    let bidir = common::bidirectional(scene, SEGMENTS);
     let z = z_scores(&run(scene, Mh::new(bidir), 5));
     assert!(z.iter().all(|z| z.abs() < 4.0), "alone: z scores {z:?}");
     let m = ra_mixture(
@@ -244,14 +236,7 @@ fn test_box_multi_chain_matches_importance_sampling() {
 #[test]
 fn test_box_bidirectional_matches_importance_sampling() {
     let scene = leak(AnalyticScene::test_box().unwrap());
-    let bidir = BidirectionalMutation::new(
-        scene,
-        BidirectionalParams {
-            max_segments: 4,
-            ..BidirectionalParams::default()
-        },
-    )
-    .unwrap();
+    let bidir = common::bidirectional(scene, 4);
     let kernel = Mh::new(
         ra_mixture(
             PerturbationKind::MultiChain,

@@ -12,9 +12,9 @@ use mcmc_core::testing::{assert_hastings_consistent, assert_path_balance, Pairwi
 use mcmc_core::{Mh, Partition, Proposal, Proposed};
 use pathspace::analytic::AnalyticScene;
 use pathspace::{
-    eye_subpath_end, ra_mixture, BidirectionalMutation, BidirectionalParams, FixedScale,
-    IndependenceMutation, Path, PathTarget, Perturbation, PerturbationKind, ScaleSource,
-    UnidirectionalParams, UnidirectionalSampler,
+    eye_subpath_end, ra_mixture, BidirectionalMutation, FixedScale, IndependenceMutation, Path,
+    PathTarget, Perturbation, PerturbationKind, ScaleSource, UnidirectionalParams,
+    UnidirectionalSampler,
 };
 use proptest::prelude::*;
 use rand::Rng;
@@ -148,14 +148,7 @@ fn ra_mixture_multi_chain() {
 }
 
 fn bidirectional(scene: &AnalyticScene) -> BidirectionalMutation<'_, AnalyticScene> {
-    BidirectionalMutation::new(
-        scene,
-        BidirectionalParams {
-            max_segments: 6,
-            ..BidirectionalParams::default()
-        },
-    )
-    .unwrap()
+    common::bidirectional(scene, 6)
 }
 
 #[test]

@@ -19,9 +19,8 @@ use pathspace::regional::{
     RegionalSigmas, ScreenPartition, SharedRegionalAdaptation, SharedSigmas,
 };
 use pathspace::{
-    ra_mixture, BidirectionalMutation, BidirectionalParams, IndependenceMutation,
-    IndependentSampler, Path, PathTarget, Perturbation, PerturbationKind, ScaleSource,
-    UnidirectionalParams, UnidirectionalSampler,
+    ra_mixture, IndependenceMutation, IndependentSampler, Path, PathTarget, Perturbation,
+    PerturbationKind, ScaleSource, UnidirectionalParams, UnidirectionalSampler,
 };
 use proptest::prelude::*;
 use rand::{Rng, RngExt};
@@ -138,14 +137,7 @@ fn regional_ra_mixture_flow_balance() {
     let m = ra_mixture(
         PerturbationKind::MultiChain,
         Perturbation::multi_chain(&scene, direction_sigmas(&scene)),
-        BidirectionalMutation::new(
-            &scene,
-            BidirectionalParams {
-                max_segments: 6,
-                ..BidirectionalParams::default()
-            },
-        )
-        .unwrap(),
+        common::bidirectional(&scene, 6),
     )
     .unwrap();
     check(
@@ -331,14 +323,7 @@ fn regional_multi_chain_and_bidirectional_preserve_pi() {
         ra_mixture(
             PerturbationKind::MultiChain,
             Perturbation::multi_chain(&scene, direction_sigmas(&scene)),
-            BidirectionalMutation::new(
-                &scene,
-                BidirectionalParams {
-                    max_segments: SEGMENTS,
-                    ..BidirectionalParams::default()
-                },
-            )
-            .unwrap(),
+            common::bidirectional(&scene, SEGMENTS),
         )
         .unwrap(),
     );

@@ -27,9 +27,8 @@ use pathspace::regional::{
     RegionalAdaptParams, RegionalSigmas, ScreenPartition, SharedRegionalAdaptation, SharedSigmas,
 };
 use pathspace::{
-    ra_mixture, BidirectionalMutation, BidirectionalParams, IndependentSampler, Path,
-    PathContribution, PathTarget, Perturbation, PerturbationKind, Rgb, UnidirectionalParams,
-    UnidirectionalSampler, Vec3,
+    ra_mixture, BidirectionalMutation, IndependentSampler, Path, PathContribution, PathTarget,
+    Perturbation, PerturbationKind, Rgb, UnidirectionalParams, UnidirectionalSampler, Vec3,
 };
 use rand::{Rng, SeedableRng};
 
@@ -109,14 +108,7 @@ fn bidirectional(
     scene: &'static AnalyticScene,
     segments: usize,
 ) -> BidirectionalMutation<'static, AnalyticScene> {
-    BidirectionalMutation::new(
-        scene,
-        BidirectionalParams {
-            max_segments: segments,
-            ..BidirectionalParams::default()
-        },
-    )
-    .unwrap()
+    common::bidirectional(scene, segments)
 }
 
 /// The RA mixture (section 8.1) of a regional perturbation and the bidirectional mutation.

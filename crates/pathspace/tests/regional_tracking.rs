@@ -14,9 +14,8 @@ use pathspace::regional::{
     RegionalSigmas, ScreenPartition, SharedRegionalAdaptation, SharedSigmas,
 };
 use pathspace::{
-    ra_mixture, BidirectionalMutation, BidirectionalParams, Path, PathMutation, PathTarget,
-    PerturbOrGlobal, Perturbation, PerturbationKind, ScaleSource, UnidirectionalParams,
-    UnidirectionalSampler,
+    ra_mixture, BidirectionalMutation, Path, PathMutation, PathTarget, PerturbOrGlobal,
+    Perturbation, PerturbationKind, ScaleSource, UnidirectionalParams, UnidirectionalSampler,
 };
 
 type Part<'a> = PathPartition<&'a AnalyticScene>;
@@ -89,14 +88,7 @@ fn run<C: Controller<Kernel, Path>>(
         },
     )
     .unwrap();
-    let bidir = BidirectionalMutation::new(
-        scene,
-        BidirectionalParams {
-            max_segments: 4,
-            ..BidirectionalParams::default()
-        },
-    )
-    .unwrap();
+    let bidir = common::bidirectional(scene, 4);
     let (mut known, mut wrong, mut moved) = (0, 0, 0);
     for c in 0..8 {
         let kernel: Kernel = Mh::new(

@@ -1,7 +1,8 @@
-//! Helpers shared by the integration tests: seeded RNGs, path draws, statistics.
+//! Helpers shared by the integration tests: seeded RNGs, path draws, statistics, the
+//! bidirectional mutation.
 #![allow(dead_code)]
 
-use pathspace::{IndependentSampler, Path};
+use pathspace::{BidirectionalMutation, BidirectionalParams, IndependentSampler, Path, PathScene};
 use rand::SeedableRng;
 
 /// A seeded test RNG.
@@ -26,4 +27,20 @@ pub(crate) fn mean_and_se(values: &[f64]) -> (f64, f64) {
     let mean = values.iter().sum::<f64>() / n;
     let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
     (mean, (var / n).sqrt())
+}
+
+/// The bidirectional mutation over `scene` with at most `max_segments` segments, the other
+/// parameters at their defaults.
+pub(crate) fn bidirectional<S: PathScene + ?Sized>(
+    scene: &S,
+    max_segments: usize,
+) -> BidirectionalMutation<'_, S> {
+    BidirectionalMutation::new(
+        scene,
+        BidirectionalParams {
+            max_segments,
+            ..BidirectionalParams::default()
+        },
+    )
+    .unwrap()
 }
