@@ -230,6 +230,19 @@ pub fn match_acceptance(
     Ok(Calibrations(fits))
 }
 
+/// A small PSSMLT for the calibration tests: Kelemen's small step (`sigma = 0`) or a
+/// Gaussian of `sigma`, with `chains` chains and `bootstrap` bootstrap samples.
+#[cfg(test)]
+pub(crate) fn small_pssmlt(sigma: f64, chains: usize, bootstrap: usize) -> MethodSettings {
+    let mut s = render::methods::PssmltSettings::kelemen2002();
+    s.chain.chains = chains;
+    s.chain.bootstrap_samples = bootstrap;
+    if sigma > 0.0 {
+        s.chain.small_step = pss::SmallMutation::Gaussian { sigma };
+    }
+    MethodSettings::from(s)
+}
+
 #[cfg(test)]
 mod tests {
     use render::methods::{MethodSettings, PssmltSettings};
@@ -294,15 +307,7 @@ mod tests {
             threads: 2,
             ..RenderSettings::default()
         };
-        let pss = |sigma: f64| {
-            let mut s = PssmltSettings::kelemen2002();
-            s.chain.chains = 16;
-            s.chain.bootstrap_samples = 1000;
-            if sigma > 0.0 {
-                s.chain.small_step = pss::SmallMutation::Gaussian { sigma };
-            }
-            MethodSettings::from(s)
-        };
+        let pss = |sigma: f64| small_pssmlt(sigma, 16, 1000);
         let found =
             match_acceptance(&[case], &probe, pss(0.0), pss, Bisection::log(1e-4, 0.5, 8)).unwrap();
         let (scene, fit) = &found.0[0];

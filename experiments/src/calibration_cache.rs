@@ -190,7 +190,6 @@ fn debug_digest(value: &impl std::fmt::Debug) -> u64 {
 
 #[cfg(test)]
 mod tests {
-    use render::methods::PssmltSettings;
     use render::session::Budget;
 
     use super::*;
@@ -205,13 +204,7 @@ mod tests {
     }
 
     fn pss(sigma: f64) -> MethodSettings {
-        let mut s = PssmltSettings::kelemen2002();
-        s.chain.chains = 8;
-        s.chain.bootstrap_samples = 500;
-        if sigma > 0.0 {
-            s.chain.small_step = pss::SmallMutation::Gaussian { sigma };
-        }
-        MethodSettings::from(s)
+        crate::calibrate::small_pssmlt(sigma, 8, 500)
     }
 
     fn temp(name: &str) -> std::path::PathBuf {
