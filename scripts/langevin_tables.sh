@@ -14,7 +14,10 @@
 # measurement lock (/work/measure.lock, or $LOCK) for one render each; equal-sample runs
 # do not need it.
 #
-# Usage: [SCENES="a b"] [OUT=dir] [SIZE=128] [LOCK=file] \
+# Timed runs are pinned to one core (CPU, default 1); every run's log (acceptance by step,
+# gradient-cache fill, direct-pass share) is kept in OUT/logs.
+#
+# Usage: [SCENES="a b"] [OUT=dir] [SIZE=128] [LOCK=file] [CPU=k] \
 #        scripts/langevin_tables.sh time|samples BUDGET [SEEDS]
 #   time BUDGET: seconds per render (the table: 30); samples BUDGET: mutations per pixel
 #   (the table: the median samples per pixel MMLT/K reached at equal time, e.g. 256).
@@ -34,13 +37,14 @@ seeds="${3:-5}"
 size="${SIZE:-128}"
 out="${OUT:-out/langevin_tables}"
 lock="${LOCK:-/work/measure.lock}"
+cpu="${CPU:-1}"
 scenes="${SCENES:-glossy-highlight motion-blur caustic-pool glossy-diffuse}"
 case "$regime" in
     time) budget_flag=(--time "$budget") ;;
     samples) budget_flag=(--spp "$budget") ;;
     *) echo "first argument: time or samples" >&2; exit 2 ;;
 esac
-mkdir -p "$out"
+mkdir -p "$out/logs"
 cargo build --release --quiet
 # A private copy: a concurrent `cargo build` must not replace the binary mid-measurement.
 bin="$out/chainlight"
@@ -79,16 +83,17 @@ for seed in $(seq 1 "$seeds"); do
             i=$(( (k + seed) % n ))
             slug=$(echo "${names[$i]}" | tr -c 'A-Za-z0-9.\n' '-')
             img="$out/$scene-$slug-$seed.exr"
+            log="$out/logs/$scene-$slug-$seed.log"
             # shellcheck disable=SC2086
             cmd=("$bin" render "scenes/$scene.gltf" ${args[$i]} "${common[@]}" \
                 "${budget_flag[@]}" --seed "$seed" -o "$img")
             if [[ "$regime" == time ]]; then
-                flock "$lock" "${cmd[@]}" > "$out/render.log" 2>&1
+                flock "$lock" taskset -c "$cpu" "${cmd[@]}" > "$log" 2>&1
             else
-                nice -n 5 "${cmd[@]}" > "$out/render.log" 2>&1
+                nice -n 5 "${cmd[@]}" > "$log" 2>&1
             fi
-            samples=$(awk '/^samples/{print $2}' "$out/render.log")
-            secs=$(awk '/^elapsed/{print $2}' "$out/render.log")
+            samples=$(awk '/^samples/{print $2}' "$log")
+            secs=$(awk '/^elapsed/{print $2}' "$log")
             metrics=$("$bin" compare "$img" "$out/refs/$scene.exr" --error-map "$out/error.png" 2>&1)
             mse=$(echo "$metrics" | awk 'tolower($1)=="mse"{print $2; exit}')
             rel=$(echo "$metrics" | awk 'tolower($1)=="relmse"{print $2; exit}')

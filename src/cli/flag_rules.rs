@@ -532,4 +532,35 @@ mod tests {
             assert_eq!(result.is_ok(), ok, "{integrator} {args:?}: {result:?}");
         }
     }
+
+    /// `--mala-preset code` brings the authors' large-step schedule unless `--large-step` is
+    /// given; the other presets keep 0.3 (the negative control).
+    #[test]
+    fn the_code_preset_brings_its_large_step_schedule() {
+        use render::methods::MalaSettings;
+        use render::mlt::LargeStepMode;
+        let large_step = |args: &[&str]| match settings("mala-hybrid", args).unwrap() {
+            MethodSettings::Mala(s) => s.chain.large_step,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(
+            large_step(&["--mala-preset", "code"]),
+            MalaSettings::CODE_LARGE_STEP
+        );
+        assert_eq!(
+            large_step(&["--mala-preset", "code", "--large-step", "0.3"]),
+            LargeStepMode::Fixed(0.3)
+        );
+        assert_eq!(
+            large_step(&["--mala-preset", "paper-values"]),
+            LargeStepMode::Fixed(0.3)
+        );
+        assert_eq!(
+            large_step(&["--large-step", "0.1,0.4"]),
+            LargeStepMode::Schedule {
+                initial: 0.1,
+                then: 0.4
+            }
+        );
+    }
 }

@@ -7,7 +7,7 @@
 use clap::Args;
 use pss::{RasterParams, SmallMutation};
 use render::methods::direct_pass::DirectSettings;
-use render::methods::{ChainSettings, MethodSettings, AUTO_LARGE_STEP_ESTIMATION};
+use render::methods::{ChainSettings, MalaSettings, MethodSettings, AUTO_LARGE_STEP_ESTIMATION};
 use render::mlt::direct::DirectPass;
 use render::mlt::dr::{DrBase, DrVariant};
 use render::mlt::LargeStepMode;
@@ -16,13 +16,18 @@ use render::IntegratorKind;
 use super::flag_rules::check_applicable;
 use super::parse;
 
+/// `--large-step` when not given: Kelemen et al. 2002's probability (pbrt-v3's value).
+const DEFAULT_LARGE_STEP: LargeStepMode = LargeStepMode::Fixed(0.3);
+
 /// The flags of `chainlight render` that belong to one method or a family of methods.
 #[derive(Debug, Args)]
 pub(crate) struct MethodFlags {
     /// MCMC integrators: the large-step probability, `auto` (Zsolnai & Szirmay-Kalos 2013:
-    /// estimated from the first mutations of every chain) or a number in 0..=1.
-    #[arg(long, value_name = "auto|P", default_value = "0.3", value_parser = parse::large_step)]
-    pub(crate) large_step: LargeStepMode,
+    /// estimated from the first mutations of every chain), a number in 0..=1, or `P1,P2`
+    /// (P1 for the first tenth of every chain's mutations, then P2) [default: 0.3; with
+    /// `--mala-preset code`: 0.05,0.2, the authors' schedule].
+    #[arg(long, value_name = "auto|P|P1,P2", value_parser = parse::large_step)]
+    pub(crate) large_step: Option<LargeStepMode>,
     /// pssmlt, mmlt: `on` combines the large-step samples with the Metropolis estimator by
     /// multiple importance sampling (Kelemen et al. 2002, section 4; LuxCore's METROPOLIS
     /// sampler), `off` uses the plain expected-value estimator [default: on for pssmlt, off
@@ -176,12 +181,12 @@ impl MethodFlags {
         ChainSettings {
             chains: self.chains as usize,
             bootstrap_samples: self.bootstrap_samples as usize,
-            large_step: match self.large_step {
+            large_step: match self.large_step.unwrap_or(DEFAULT_LARGE_STEP) {
                 LargeStepMode::Auto { initial, .. } => LargeStepMode::Auto {
                     initial,
                     estimation_steps: AUTO_LARGE_STEP_ESTIMATION,
                 },
-                fixed => fixed,
+                other => other,
             },
             small_step: self.small_step,
             normalization: self.normalization.unwrap_or_default(),
@@ -275,6 +280,11 @@ impl MethodFlags {
                 s.chain = self.chain();
                 s.config.params = self.mala_preset.langevin;
                 s.config.fallback = self.mala_preset.fallback;
+                if self.large_step.is_none()
+                    && self.mala_preset == render::mlt::mala::MalaParams::luan2020_code()
+                {
+                    s.chain.large_step = MalaSettings::CODE_LARGE_STEP;
+                }
                 s.cheap_then_expensive = self.mala_kernel.0;
                 s.config.max_depth = self.mala_max_depth;
                 s.config.gradient = self.mala_gradient;

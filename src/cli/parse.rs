@@ -21,20 +21,29 @@ pub(crate) fn seconds(text: &str) -> Result<Duration, String> {
 }
 
 /// Parses `--exposure` stops: a finite number in [-64, 64].
-/// `--large-step`: `auto` or a probability in 0..=1.
+/// `--large-step`: `auto`, a probability in 0..=1, or `P1,P2` (a warm-up schedule, both
+/// in 0..=1).
 pub(crate) fn large_step(text: &str) -> Result<render::mlt::LargeStepMode, String> {
+    use render::mlt::LargeStepMode;
     if text.eq_ignore_ascii_case("auto") {
-        return Ok(render::mlt::LargeStepMode::Auto {
+        return Ok(LargeStepMode::Auto {
             initial: 0.5,
             estimation_steps: 1_000,
         });
     }
-    match text.parse::<f64>() {
-        Ok(p) if (0.0..=1.0).contains(&p) => Ok(render::mlt::LargeStepMode::Fixed(p)),
-        _ => Err(format!(
-            "expected `auto` or a probability in 0..=1, got '{text}'"
-        )),
-    }
+    let probability = |t: &str| match t.trim().parse::<f64>() {
+        Ok(p) if (0.0..=1.0).contains(&p) => Some(p),
+        _ => None,
+    };
+    let parsed = match text.split_once(',') {
+        Some((a, b)) => probability(a)
+            .zip(probability(b))
+            .map(|(initial, then)| LargeStepMode::Schedule { initial, then }),
+        None => probability(text).map(LargeStepMode::Fixed),
+    };
+    parsed.ok_or_else(|| {
+        format!("expected `auto`, a probability in 0..=1 or two of them as P1,P2, got '{text}'")
+    })
 }
 
 /// `--direct-share`: `auto` (the balanced pass) or a share of the budget in 0.01..=0.9.
@@ -159,6 +168,23 @@ mod tests {
         assert!(stops("100").is_err() && stops("NaN").is_err());
         assert_eq!(positive("1e-3"), Ok(1e-3));
         assert!(positive("0").is_err() && positive("-1").is_err() && positive("inf").is_err());
+    }
+
+    #[test]
+    fn large_step_schedules() {
+        use render::mlt::LargeStepMode;
+        assert_eq!(large_step("0.3"), Ok(LargeStepMode::Fixed(0.3)));
+        assert_eq!(
+            large_step("0.05, 0.2"),
+            Ok(LargeStepMode::Schedule {
+                initial: 0.05,
+                then: 0.2
+            })
+        );
+        for bad in ["0.05,", ",0.2", "0.05,1.5", "0.05,0.2,0.3", "-1,0.2", "often"] {
+            let err = large_step(bad).expect_err(bad);
+            assert!(err.contains("P1,P2"), "{bad}: {err}");
+        }
     }
 }
 

@@ -3,6 +3,7 @@
 
 mod global_scale;
 mod large_step;
+mod large_step_schedule;
 mod region_table;
 mod regional_params;
 mod regional_pool;
@@ -14,6 +15,7 @@ pub use large_step::{
     automatic_large_step_probability, AutoLargeStep, LargeStepEstimate, LargeStepStats,
     FLATNESS_THRESHOLD, NOT_FLAT_LARGE_STEP_PROBABILITY,
 };
+pub use large_step_schedule::LargeStepSchedule;
 pub use regional_params::{
     RegionalScaleParams, RegionalUpdateRule, PIXELS_PER_LEAF, SPLIT_UPDATES,
 };

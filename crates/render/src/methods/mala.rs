@@ -16,7 +16,7 @@ use crate::bdpt::BdptParams;
 use crate::error::RenderError;
 use crate::mlt::direct::DirectPass;
 use crate::mlt::mala::{self, GradientMethod, MalaConfig, MalaVariant};
-use crate::mlt::PATH_STREAMS;
+use crate::mlt::{LargeStepMode, PATH_STREAMS};
 use crate::scene::Scene;
 
 /// Langevin MLT's settings; the variant ([`MalaConfig::variant`]) picks the row.
@@ -75,16 +75,25 @@ impl MalaSettings {
     /// The authors' code ([`LangevinParams::luan2020_code`]: epsilon 0.005 as a standard
     /// deviation, shrink prior 0.005, `M` in `[0.01, 100]`, drift clamped to `+-5`, K = 5
     /// within `0.01 sqrt(d)`, H = 3000, first-visit Adam start), plus its fallback step
-    /// (probability 0.1). The code's large-step schedule (0.05 for the first tenth of a
-    /// chain, then 0.2) is not reproduced: the large step stays the chain settings'.
+    /// (probability 0.1) and its large-step schedule ([`Self::CODE_LARGE_STEP`]).
     #[must_use]
     pub const fn luan2020_code() -> Self {
         let mut s = Self::luan2020();
         let p = pss::mala::MalaParams::luan2020_code();
         s.config.params = p.langevin;
         s.config.fallback = p.fallback;
+        s.chain.large_step = Self::CODE_LARGE_STEP;
         s
     }
+
+    /// The authors' code's large steps: probability 0.05 (`largestepprob`) for the first
+    /// tenth of every chain's mutations (`LS_RATIO`), while the chain learns its
+    /// preconditioner, then 0.05 x 4 = 0.2 (`largestepscale` 4, as both shipped `lmc.xml`
+    /// scenes set it).
+    pub const CODE_LARGE_STEP: LargeStepMode = LargeStepMode::Schedule {
+        initial: 0.05,
+        then: 0.2,
+    };
 
     /// [`MalaSettings::luan2020`] with another adaptation variant (the paper's Fig. 7-9
     /// compare plain, online, cache-driven and hybrid adaptation).

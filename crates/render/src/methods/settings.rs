@@ -239,11 +239,18 @@ impl ChainSettings {
                 "1..=100000000",
             ));
         }
-        let p = match self.large_step {
-            LargeStepMode::Fixed(p) | LargeStepMode::Auto { initial: p, .. } => p,
+        let (p, then) = match self.large_step {
+            LargeStepMode::Fixed(p) | LargeStepMode::Auto { initial: p, .. } => (p, p),
+            LargeStepMode::Schedule { initial, then } => (initial, then),
         };
-        if !(0.0..=1.0).contains(&p) {
-            return Err(RenderError::setting("large-step", p, "auto or 0..=1"));
+        for p in [p, then] {
+            if !(0.0..=1.0).contains(&p) {
+                return Err(RenderError::setting(
+                    "large-step",
+                    p,
+                    "auto, 0..=1, or P1,P2 both in 0..=1",
+                ));
+            }
         }
         validate_normalization(self.normalization)
     }

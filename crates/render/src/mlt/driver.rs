@@ -24,7 +24,7 @@
 
 use std::sync::atomic::AtomicBool;
 
-use mcmc_core::controller::{LargeStepStats, LargeStepTunable};
+use mcmc_core::controller::{LargeStepSchedule, LargeStepStats, LargeStepTunable};
 use mcmc_core::render_loop::{
     Both, ChainSlot, IndependentStates, LargeStepMis, LoopBudget, LoopOutput, LoopSettings,
     RenderLoop, SharedController, SplatPayload,
@@ -32,7 +32,7 @@ use mcmc_core::render_loop::{
 use mcmc_core::{Controller, Kernel, McmcError, NoAdaptation, Progress, Target};
 use pss::{FreshPss, PssState};
 
-use super::estimation::{auto_large_step, set_up_estimation};
+use super::estimation::{auto_large_step, set_up_estimation, warm_up_steps};
 use super::run::finish;
 use super::{
     LargeStepMode, MakeKernel, MltBudget, MltEstimator, MltOutput, MltSettings, MmltStrata,
@@ -264,6 +264,18 @@ where
                     (pooled.steps() > 0).then(|| pooled.estimate())
                 })
             }
+            LargeStepMode::Schedule { initial, then } => {
+                let schedule = large_step_schedule(&loop_settings, then);
+                let out = self.run_loop(
+                    states,
+                    |slot| wrap(slot, make_kernel.make(slot, initial)),
+                    |_| schedule,
+                    &loop_settings,
+                    progress,
+                    cancel,
+                );
+                finish(out, &self.settings, then, |_| None)
+            }
         }
     }
 
@@ -327,6 +339,21 @@ where
                 output.notes.extend(summary);
                 output
             }
+            LargeStepMode::Schedule { initial, then } => {
+                let schedule = large_step_schedule(&loop_settings, then);
+                let out = self.run_loop(
+                    &states,
+                    |slot| make_kernel.make(slot, initial),
+                    |slot| Both(schedule, make_controller(slot)),
+                    &loop_settings,
+                    progress,
+                    cancel,
+                );
+                let summary = out.as_ref().ok().and_then(|o| C::summary(&o.shared.1));
+                let mut output = finish(out, &self.settings, then, |_| None);
+                output.notes.extend(summary);
+                output
+            }
         }
     }
 
@@ -383,4 +410,11 @@ where
         let shared = out.as_ref().ok().map(|o| o.shared.clone());
         (finish(out, &self.settings, 0.0, |_| None), shared)
     }
+}
+
+/// Every chain's [`LargeStepSchedule`]: `then` after the warm-up of
+/// [`super::estimation::warm_up_steps`].
+fn large_step_schedule(loop_settings: &LoopSettings, then: f64) -> LargeStepSchedule {
+    LargeStepSchedule::new(warm_up_steps(loop_settings), then.clamp(0.0, 1.0))
+        .unwrap_or_else(|_| unreachable!("clamped to [0, 1]"))
 }

@@ -56,6 +56,24 @@ pub(super) fn set_up_estimation(loop_settings: &mut LoopSettings, estimation_ste
     steps
 }
 
+/// Warm-up of [`crate::mlt::LargeStepMode::Schedule`] under a time budget, in mutations per
+/// chain: a chain's length is not known in advance there, so the warm-up is a fixed count
+/// (about a tenth of a chain in the 30 s renders of the Langevin tables).
+pub const TIME_BUDGET_WARM_UP_STEPS: u64 = 1000;
+
+/// Mutations per chain of a [`crate::mlt::LargeStepMode::Schedule`] warm-up: the first
+/// [`ESTIMATION_SHARE_DIVISOR`]-th of each chain's mutations under a mutation budget (the
+/// authors' code: `LS_RATIO`, 10 % of a chain's samples), [`TIME_BUDGET_WARM_UP_STEPS`]
+/// under a time budget; at least 1.
+pub(super) fn warm_up_steps(loop_settings: &LoopSettings) -> u64 {
+    let chains = loop_settings.chains.max(1) as u64;
+    match loop_settings.budget {
+        LoopBudget::Mutations(n) => n / chains / ESTIMATION_SHARE_DIVISOR,
+        LoopBudget::Time(_) => TIME_BUDGET_WARM_UP_STEPS,
+    }
+    .max(1)
+}
+
 /// The pooled controller of every chain: it records during the first round and freezes with
 /// the statistics of all chains at its end (one step pooled suffices, since the loop pools
 /// only at round boundaries). Freezing at the first boundary rather than at a count of
@@ -92,6 +110,19 @@ mod tests {
         assert_eq!(set_up_estimation(&mut long, 1000), 1000);
         let mut tiny = settings(256, LoopBudget::Mutations(100));
         assert_eq!(set_up_estimation(&mut tiny, 1000), 1);
+    }
+
+    #[test]
+    fn a_warm_up_is_a_tenth_of_each_chain_or_fixed_under_a_time_budget() {
+        assert_eq!(
+            warm_up_steps(&settings(256, LoopBudget::Mutations(256 * 1024))),
+            102
+        );
+        assert_eq!(warm_up_steps(&settings(256, LoopBudget::Mutations(100))), 1);
+        assert_eq!(
+            warm_up_steps(&settings(256, LoopBudget::Time(Duration::from_secs(30)))),
+            TIME_BUDGET_WARM_UP_STEPS
+        );
     }
 
     #[test]

@@ -14,7 +14,9 @@ mod stage_map;
 mod strata;
 
 pub use driver::{GivenStates, MltDriver, PrimarySamples};
-pub use estimation::{ESTIMATION_SHARE_DIVISOR, TIME_BUDGET_ESTIMATION_STEPS};
+pub use estimation::{
+    ESTIMATION_SHARE_DIVISOR, TIME_BUDGET_ESTIMATION_STEPS, TIME_BUDGET_WARM_UP_STEPS,
+};
 pub use path_sampler::{
     mmlt_depth_normalization, mmlt_depth_normalization_until, DepthNormalization, MmltTarget,
     PathPayload, PssmltTarget, PATH_STREAMS,

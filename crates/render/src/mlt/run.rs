@@ -29,6 +29,17 @@ pub enum LargeStepMode {
         /// Mutations per chain requested for the estimation phase (capped as above).
         estimation_steps: u64,
     },
+    /// A warm-up schedule (the Langevin MLT authors' code, `largestepprob` and
+    /// `largestepscale`): `initial` for the first tenth of every chain's mutations, then
+    /// `then` (`mcmc_core::controller::LargeStepSchedule`; how long the warm-up is under a
+    /// time budget: `mlt::estimation::set_up_warm_up`). Not adaptive: the switch depends only
+    /// on the chain's step count.
+    Schedule {
+        /// Large-step probability during the warm-up.
+        initial: f64,
+        /// Large-step probability after it.
+        then: f64,
+    },
 }
 
 /// Budget of an MCMC render.
