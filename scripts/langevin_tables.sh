@@ -15,7 +15,9 @@
 # do not need it.
 #
 # Timed runs are pinned to one core (CPU, default 1); every run's log (acceptance by step,
-# gradient-cache fill, direct-pass share) is kept in OUT/logs.
+# gradient-cache fill, direct-pass share) is kept in OUT/logs. Every render also writes its
+# direct pass and its chains' part (`--write-parts`): scripts/pair_mse.py OUT measures the
+# error of both without a reference, from seed pairs.
 #
 # Usage: [SCENES="a b"] [OUT=dir] [SIZE=128] [LOCK=file] [CPU=k] \
 #        scripts/langevin_tables.sh time|samples BUDGET [SEEDS]
@@ -50,7 +52,7 @@ cargo build --release --quiet
 bin="$out/chainlight"
 cp target/release/chainlight "$bin"
 common=(--max-depth 5 --width "$size" --height "$size" --threads 1 --large-step 0.3
-        --direct-share auto --direct-depth 1)
+        --direct-share auto --direct-depth 1 --write-parts)
 names=("MMLT/K" "MMLT/G(0.005)" "MALA" "MALA-online" "MALA-cache" "MALA-hybrid" "cheap-then-expensive")
 args=(
     "--integrator mmlt"

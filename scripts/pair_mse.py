@@ -12,7 +12,9 @@ Usage: scripts/pair_mse.py DIR [CHAINLIGHT]
   scene and method names). CHAINLIGHT is the binary (default DIR/chainlight).
 Prints, per scene and method: the mean over all seed pairs of MSE(a, b) / 2 and the smallest
 and largest pair, the number of pairs, and the median MSE against the reference from
-results.txt; and writes DIR/pairs.txt with one line per pair.
+results.txt; where the renders have parts (`render --write-parts`: `<name>_chains.exr`), the
+same for the chains' parts alone (the direct-lighting pass's noise removed). Writes
+DIR/pairs.txt with one line per pair (`-` where a part is missing).
 """
 
 import itertools
@@ -57,7 +59,10 @@ def main():
     for scene, method, seed, ref_mse in rows:
         groups.setdefault((scene, method), []).append((seed, ref_mse))
     pairs_out = []
-    print("scene method pair_mse_mean pair_min pair_max pairs ref_mse_median")
+    print(
+        "scene method pair_mse_mean pair_min pair_max pairs ref_mse_median"
+        " chains_mean chains_min chains_max chain_pairs"
+    )
     for (scene, method), runs in groups.items():
         # The image name: the tables script's slug of the method name.
         slug = re.sub(r"[^A-Za-z0-9.]", "-", method.replace("_", " "))
@@ -66,21 +71,26 @@ def main():
             path = os.path.join(directory, f"{scene}-{slug}-{seed}.exr")
             if os.path.exists(path):
                 images.append((seed, path))
-        values = []
+        values, chain_values = [], []
         for (sa, a), (sb, b) in itertools.combinations(images, 2):
             half = mse(binary, a, b) / 2.0
             values.append(half)
-            pairs_out.append(f"{scene} {method} {sa} {sb} {half:.6e}")
+            ca, cb = (p[: -len(".exr")] + "_chains.exr" for p in (a, b))
+            chain_half = "-"
+            if os.path.exists(ca) and os.path.exists(cb):
+                chain_values.append(mse(binary, ca, cb) / 2.0)
+                chain_half = f"{chain_values[-1]:.6e}"
+            pairs_out.append(f"{scene} {method} {sa} {sb} {half:.6e} {chain_half}")
         ref_median = statistics.median(r for _, r in runs)
-        if values:
-            print(
-                f"{scene} {method} {statistics.mean(values):.4e} {min(values):.4e} "
-                f"{max(values):.4e} {len(values)} {ref_median:.4e}"
-            )
-        else:
-            print(f"{scene} {method} - - - 0 {ref_median:.4e}")
+
+        def summary(v):
+            if not v:
+                return "- - - 0"
+            return f"{statistics.mean(v):.4e} {min(v):.4e} {max(v):.4e} {len(v)}"
+
+        print(f"{scene} {method} {summary(values)} {ref_median:.4e} {summary(chain_values)}")
     with open(os.path.join(directory, "pairs.txt"), "w", encoding="utf-8") as f:
-        f.write("# scene method seed_a seed_b mse_half\n")
+        f.write("# scene method seed_a seed_b mse_half chains_mse_half\n")
         f.write("\n".join(pairs_out) + "\n")
 
 

@@ -171,6 +171,50 @@ fn bdpt_strategy_images_are_written() {
     }
 }
 
+/// `--write-parts`: a render with a direct-lighting pass writes the pass's image and the
+/// chains' part, which add up to the image (to f32 rounding); both carry light. A render
+/// without a pass writes no parts and says why (the negative control).
+#[test]
+fn direct_pass_parts_add_up_to_the_image() {
+    let dir = temp_dir("parts");
+    let render = |method: &[&str], name: &str| {
+        let out = dir.join(name);
+        let mut args = vec!["render", "--spp", "4", "--width", "16", "--height", "16"];
+        args.extend_from_slice(method);
+        args.extend_from_slice(&["--write-parts", "-o", path_str(&out)]);
+        let output = chainlight(&args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        output
+    };
+    let pssmlt = [
+        "--integrator",
+        "pssmlt",
+        "--bootstrap-samples",
+        "2000",
+    ];
+    render(&pssmlt, "p.exr");
+    let image = read_exr(&dir.join("p.exr")).unwrap();
+    let direct = read_exr(&dir.join("p_direct.exr")).unwrap();
+    let chains = read_exr(&dir.join("p_chains.exr")).unwrap();
+    assert!(direct.mean_luminance() > 0.0 && chains.mean_luminance() > 0.0);
+    for ((sum, d), c) in image.pixels.iter().zip(&direct.pixels).zip(&chains.pixels) {
+        for k in 0..3 {
+            let tolerance = 1e-5 * sum[k].abs().max(1e-3);
+            assert!(
+                (sum[k] - (d[k] + c[k])).abs() <= tolerance,
+                "{sum:?} != {d:?} + {c:?}"
+            );
+        }
+    }
+    let without = render(&["--integrator", "pt"], "q.exr");
+    assert!(!dir.join("q_direct.exr").exists() && !dir.join("q_chains.exr").exists());
+    assert!(
+        stderr(&without).contains("no separate direct-lighting pass"),
+        "{}",
+        stderr(&without)
+    );
+}
+
 /// `--time` covers the whole MCMC render, bootstrap included: with a bootstrap of 2 * 10^7
 /// samples (minutes of work) and `--time 2`, the bootstrap stops at its share of the budget
 /// and the render returns in about 2 s (bound: 8 s, for a loaded machine), saying so.

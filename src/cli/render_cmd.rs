@@ -97,6 +97,11 @@ pub(crate) struct RenderArgs {
     /// the image one process would render (bit-identical under --spp). docs/cluster.md.
     #[arg(long, allow_negative_numbers = true, value_name = "K/N", value_parser = shard_cmd::parse_shard)]
     shard: Option<render::shard::Shard>,
+    /// MCMC integrators with a separate direct-lighting pass: also write the pass's image and
+    /// the chains' part as `<stem>_direct.exr` and `<stem>_chains.exr` (the image is their
+    /// sum), e.g. to compare methods that share the pass without its noise.
+    #[arg(long)]
+    write_parts: bool,
 }
 
 /// The default `--spp`.
@@ -112,6 +117,11 @@ fn stem(output: &Path) -> String {
 /// The MIS-weighted image of BDPT strategy `(s, t)`: `<stem>_s<S>_t<T>.exr` next to `output`.
 fn strategy_path(output: &Path, (s, t): (u8, u8)) -> PathBuf {
     output.with_file_name(format!("{}_s{s}_t{t}.exr", stem(output)))
+}
+
+/// A part of an image with a direct-lighting pass: `<stem>_<part>.exr` next to `output`.
+fn part_path(output: &Path, part: &str) -> PathBuf {
+    output.with_file_name(format!("{}_{part}.exr", stem(output)))
 }
 
 /// The delayed-rejection stage map: `<stem>_stage2.exr` next to `output` (and its `.png`).
@@ -199,6 +209,14 @@ fn check_paths(args: &RenderArgs, settings: &RenderSettings) -> CliResult<PathBu
         Named::new("the PNG preview", &png),
     ];
     outputs.extend(side_files(&args.output, settings));
+    if args.write_parts {
+        for part in ["direct", "chains"] {
+            outputs.push(Named::new(
+                format!("the {part} part"),
+                part_path(&args.output, part),
+            ));
+        }
+    }
     outputs::check(&outputs, &inputs)?;
     Ok(png)
 }
@@ -360,6 +378,19 @@ pub(crate) fn run(args: RenderArgs, given: &dyn Fn(&str) -> bool) -> CliResult<(
     for (strategy, img) in &output.strategy_images {
         let path = strategy_path(&args.output, *strategy);
         write(&path, "", image_io::write_exr(&path, img));
+    }
+    if args.write_parts {
+        match &output.direct_parts {
+            Some(parts) => {
+                for (part, img) in [("direct", &parts.direct), ("chains", &parts.chains)] {
+                    let path = part_path(&args.output, part);
+                    write(&path, "", image_io::write_exr(&path, img));
+                }
+            }
+            None => eprintln!(
+                "note: --write-parts: this render ran no separate direct-lighting pass, so there are no parts to write"
+            ),
+        }
     }
     if let Some(map) = &output.stage_map {
         // The delayed-rejection stage map (share of each pixel's estimate from second-stage

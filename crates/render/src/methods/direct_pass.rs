@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use super::{
-    relative_error, unsampled_note, DirectPassStats, RenderOutput, RenderSettings, Run, Unsampled,
+    relative_error, unsampled_note, DirectParts, DirectPassStats, RenderOutput, RenderSettings, Run, Unsampled,
 };
 use crate::bdpt::{BdptOutput, BdptParams};
 use crate::budget::Budget;
@@ -283,6 +283,7 @@ pub fn merge_into(
         Unsampled::CameraSamples,
     ));
     output.unsampled_pixels = d.pass.unsampled_pixels;
+    let chains = output.image.clone();
     direct::add_into(&mut output.image, &d.pass.image);
     if let (Some(partial), Some(c)) = (output.partial.as_mut(), d.pass.component) {
         partial.components.push(c);
@@ -299,6 +300,10 @@ pub fn merge_into(
         );
         stats.times.direct_pass = d.elapsed;
     }
+    output.direct_parts = Some(DirectParts {
+        direct: d.pass.image,
+        chains,
+    });
 }
 
 /// A given normalisation (`--normalization B|FILE`) is the whole image's mean luminance: with

@@ -47,6 +47,21 @@ pub struct RenderOutput {
     /// A sharded render's accumulators, which add up with the other shards' to the whole
     /// render ([`crate::shard`]); `None` for an unsharded render.
     pub partial: Option<Partial>,
+    /// The two parts of an MCMC render with a separate direct-lighting pass, whose sum is
+    /// [`RenderOutput::image`]; `None` without a pass.
+    pub direct_parts: Option<DirectParts>,
+}
+
+/// An MCMC render with a separate direct-lighting pass, split: the pass's image (path depths
+/// up to the pass's depth) and the chains' (the deeper paths). Comparing the chains' parts of
+/// two methods that share the pass measures what the chains differ by without the pass's
+/// noise.
+#[derive(Clone, Debug)]
+pub struct DirectParts {
+    /// The direct-lighting pass's image.
+    pub direct: Image,
+    /// The chains' image.
+    pub chains: Image,
 }
 
 impl RenderOutput {
@@ -68,6 +83,7 @@ impl RenderOutput {
             sigma_map: None,
             lqmc: None,
             partial: None,
+            direct_parts: None,
         }
     }
 }
