@@ -35,6 +35,7 @@ use mcmc_core::testing::{
 use mcmc_core::toy::{uniform_edges, Bins, ToyTarget, UniformMixture};
 use mcmc_core::{DelayedRejection, GaussianRandomWalk, Kernel, Mh};
 use nalgebra::SymmetricEigen;
+use rayon::prelude::*;
 
 /// Exact starts per check.
 const STARTS: usize = 10_000;
@@ -105,15 +106,26 @@ struct Sweep {
 }
 
 impl Sweep {
-    fn run<K: Kernel<UniformMixture> + Clone>(name: &'static str, kernel: &K, base: u64) -> Self {
-        let (t, bins) = (target(), fine_bins());
-        let (mut p_values, mut hotelling) = (Vec::new(), Vec::new());
-        for seed in base..base + SEEDS {
-            let params = SplatParams::new(STARTS, seed);
-            let moments = splat_moments(&t, kernel, |rng| t.sample_exact(rng), &bins, &params);
-            p_values.push(moments.test().p_value);
-            hotelling.push(hotelling_p_value(&moments));
-        }
+    /// The checks of a sweep are independent (one seed each), so they run on the rayon pool;
+    /// the p-values are collected in seed order, whatever the number of threads.
+    fn run<K: Kernel<UniformMixture> + Clone + Sync>(
+        name: &'static str,
+        kernel: &K,
+        base: u64,
+    ) -> Self {
+        let checks: Vec<(f64, f64)> = (base..base + SEEDS)
+            .into_par_iter()
+            .map_init(
+                || (target(), fine_bins()),
+                |(t, bins), seed| {
+                    let params = SplatParams::new(STARTS, seed);
+                    let moments =
+                        splat_moments(&*t, kernel, |rng| t.sample_exact(rng), &*bins, &params);
+                    (moments.test().p_value, hotelling_p_value(&moments))
+                },
+            )
+            .collect();
+        let (p_values, hotelling) = checks.into_iter().unzip();
         let sweep = Self {
             name,
             p_values,
