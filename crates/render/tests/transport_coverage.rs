@@ -25,6 +25,7 @@ use std::sync::OnceLock;
 
 use common::coverage::{CoverageScene, SCENES};
 use common::stats::{assert_finite_non_negative, block_means, mean_se, t_critical};
+use rayon::prelude::*;
 use render::bdpt::{render_bdpt, BdptParams};
 use render::image::Image;
 use render::scene::Scene;
@@ -84,33 +85,35 @@ fn reference(scene: &CoverageScene) -> &'static Reference {
             max_depth: DEPTH,
             ..BdptParams::default()
         };
-        let mut full = Vec::with_capacity(K);
-        let mut eye_side_only = Vec::with_capacity(K);
-        for k in 0..K as u64 {
-            let cancel = AtomicBool::new(false);
-            let out = render_bdpt(
-                &built,
-                &params,
-                Some(REF_SPP),
-                None,
-                50_000 + k,
-                true,
-                &NoProgress,
-                &cancel,
-            );
-            assert_eq!(out.dropped, 0, "{}: BDPT reference", scene.name);
-            assert_finite_non_negative(&out.image, "BDPT reference");
-            let mut eye = Image::new(out.image.width, out.image.height);
-            for (_, img) in out.strategy_images.iter().filter(|((s, _), _)| *s <= 1) {
-                for (p, q) in eye.pixels.iter_mut().zip(&img.pixels) {
-                    for c in 0..3 {
-                        p[c] += q[c];
+        // Independent renders (one seed each): on the rayon pool, collected in seed order.
+        let renders: Vec<(Image, Image)> = (0..K as u64)
+            .into_par_iter()
+            .map(|k| {
+                let cancel = AtomicBool::new(false);
+                let out = render_bdpt(
+                    &built,
+                    &params,
+                    Some(REF_SPP),
+                    None,
+                    50_000 + k,
+                    true,
+                    &NoProgress,
+                    &cancel,
+                );
+                assert_eq!(out.dropped, 0, "{}: BDPT reference", scene.name);
+                assert_finite_non_negative(&out.image, "BDPT reference");
+                let mut eye = Image::new(out.image.width, out.image.height);
+                for (_, img) in out.strategy_images.iter().filter(|((s, _), _)| *s <= 1) {
+                    for (p, q) in eye.pixels.iter_mut().zip(&img.pixels) {
+                        for c in 0..3 {
+                            p[c] += q[c];
+                        }
                     }
                 }
-            }
-            full.push(out.image);
-            eye_side_only.push(eye);
-        }
+                (out.image, eye)
+            })
+            .collect();
+        let (full, eye_side_only) = renders.into_iter().unzip();
         if let Some(dir) = std::env::var_os("CHAINLIGHT_COVERAGE_DUMP") {
             // For inspection: the reference's mean image, at 64 x 64 pixels.
             let big = (scene.build)(64);
@@ -172,21 +175,33 @@ enum Outcome {
     Rendered(Vec<Image>),
 }
 
+/// The `R` replicates of `kind` (seeds `seed0 + r`), independent one-thread renders run on the
+/// rayon pool and collected in seed order; an integrator that refuses the scene refuses it on
+/// every replicate.
 fn run(kind: IntegratorKind, scene: &Scene, seed0: u64) -> Outcome {
-    let mut images = Vec::with_capacity(R);
-    for r in 0..R as u64 {
-        let s = settings(kind, seed0 + r);
-        match render(scene, &s, &NoProgress, &AtomicBool::new(false)) {
-            Ok(out) => {
-                assert!(!out.cancelled);
-                assert_finite_non_negative(&out.image, "coverage replicate");
-                images.push(out.image);
-            }
-            Err(e) => {
-                assert_eq!(r, 0, "refused on replicate {r} only: {e}");
-                return Outcome::Refused(e.to_string());
-            }
+    let results: Vec<Result<Image, String>> = (0..R as u64)
+        .into_par_iter()
+        .map(|r| -> Result<Image, String> {
+            let s = settings(kind, seed0 + r);
+            let out = render(scene, &s, &NoProgress, &AtomicBool::new(false))
+                .map_err(|e| e.to_string())?;
+            assert!(!out.cancelled);
+            assert_finite_non_negative(&out.image, "coverage replicate");
+            Ok(out.image)
+        })
+        .collect();
+    if let Err(message) = &results[0] {
+        for (r, result) in results.iter().enumerate() {
+            assert!(
+                result.is_err(),
+                "refused on replicate 0 only, not on {r}: {message}"
+            );
         }
+        return Outcome::Refused(message.clone());
+    }
+    let mut images = Vec::with_capacity(R);
+    for (r, result) in results.into_iter().enumerate() {
+        images.push(result.unwrap_or_else(|e| panic!("refused on replicate {r} only: {e}")));
     }
     Outcome::Rendered(images)
 }
