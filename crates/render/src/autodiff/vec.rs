@@ -117,6 +117,53 @@ impl<T: Real> V3<T> {
     pub fn max_element(self) -> T {
         self.x.max(self.y).max(self.z)
     }
+
+    /// The constant vector `c` (zero derivatives).
+    #[inline]
+    pub fn cst(c: V3<f64>) -> Self {
+        Self::new(T::cst(c.x), T::cst(c.y), T::cst(c.z))
+    }
+    /// Dot product with a constant vector: `self.dot(V3::cst(c))` with every product taken as
+    /// `T * f64`, which scales the derivatives instead of applying the product rule to a
+    /// constant's zero derivatives (same value; the same derivatives where every value is
+    /// finite, up to the sign of a zero).
+    #[inline]
+    pub fn dot_c(self, c: V3<f64>) -> T {
+        self.x * c.x + self.y * c.y + self.z * c.z
+    }
+    /// Cross product with a constant vector, `self x c` ([`V3::dot_c`]'s mixed products).
+    #[inline]
+    pub fn cross_c(self, c: V3<f64>) -> Self {
+        Self::new(
+            self.y * c.z - self.z * c.y,
+            self.z * c.x - self.x * c.z,
+            self.x * c.y - self.y * c.x,
+        )
+    }
+    /// Component-wise product with a constant vector ([`V3::dot_c`]'s mixed products).
+    #[inline]
+    pub fn mul_c(self, c: V3<f64>) -> Self {
+        Self::new(self.x * c.x, self.y * c.y, self.z * c.z)
+    }
+    /// Sum with a constant vector (the derivatives pass unchanged).
+    #[inline]
+    pub fn add_c(self, c: V3<f64>) -> Self {
+        Self::new(self.x + c.x, self.y + c.y, self.z + c.z)
+    }
+    /// Difference with a constant vector, `self - c` (the derivatives pass unchanged).
+    #[inline]
+    pub fn sub_c(self, c: V3<f64>) -> Self {
+        Self::new(self.x - c.x, self.y - c.y, self.z - c.z)
+    }
+}
+
+impl V3<f64> {
+    /// This constant vector times the scalar `s`: `V3::cst(self) * s` with the products taken
+    /// as `T * f64` ([`V3::dot_c`]).
+    #[inline]
+    pub fn times<T: Real>(self, s: T) -> V3<T> {
+        V3::new(s * self.x, s * self.y, s * self.z)
+    }
 }
 
 impl<T: Real> Add for V3<T> {
@@ -148,5 +195,66 @@ impl<T: Real> Mul<T> for V3<T> {
     #[inline]
     fn mul(self, s: T) -> Self {
         Self::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Dual, Lane};
+    use super::*;
+
+    /// A vector of dual numbers with arbitrary lanes, from a seed.
+    fn dual_vec<L: Lane>(seed: f64) -> V3<Dual<3, L>> {
+        let c = |k: f64| {
+            let v = (seed * 1.7 + k * 0.61).sin() * 3.0;
+            Dual {
+                v,
+                d: [0.3 * k - seed, seed * seed - k, (seed + k).cos()].map(L::from_f64),
+            }
+        };
+        V3::new(c(1.0), c(2.0), c(3.0))
+    }
+
+    fn constant(seed: f64) -> V3<f64> {
+        V3::new(seed - 0.4, (seed * 2.3).cos() * 5.0, -1.5 * seed)
+    }
+
+    /// Equal values and lanes (`==`, so `-0 == 0`: the mixed forms may differ from the full
+    /// product rule in the sign of a zero lane, never otherwise at finite values).
+    fn same<L: Lane>(a: V3<Dual<3, L>>, b: V3<Dual<3, L>>) -> bool {
+        [(a.x, b.x), (a.y, b.y), (a.z, b.z)]
+            .iter()
+            .all(|(p, q)| p.v == q.v && p.d == q.d)
+    }
+
+    fn check_mixed<L: Lane>() {
+        for seed in [0.2, 1.1, -2.7, 3.9] {
+            let (a, c, s) = (dual_vec::<L>(seed), constant(seed), dual_vec::<L>(-seed).y);
+            let k = V3::cst(c);
+            let dot = |x: Dual<3, L>| V3::new(x, x, x);
+            assert!(same(dot(a.dot_c(c)), dot(a.dot(k))));
+            assert!(same(a.cross_c(c), a.cross(k)));
+            assert!(same(a.mul_c(c), a.mul_v(k)));
+            assert!(same(a.add_c(c), a + k));
+            assert!(same(a.sub_c(c), a - k));
+            assert!(same(c.times(s), k * s));
+        }
+    }
+
+    #[test]
+    fn mixed_operations_equal_the_full_dual_products() {
+        check_mixed::<f64>();
+        check_mixed::<f32>();
+    }
+
+    #[test]
+    fn wrong_mixed_product_is_detected() {
+        // Negative control: a mixed product that forgets to scale the lanes by the constant
+        // (keeps the dual operand's derivatives) fails the comparison above.
+        let (a, c) = (dual_vec::<f64>(1.1), constant(1.1));
+        let wrong = |x: Dual<3>, k: f64| Dual { v: x.v * k, d: x.d };
+        let wrong_mul = V3::new(wrong(a.x, c.x), wrong(a.y, c.y), wrong(a.z, c.z));
+        assert!(!same(wrong_mul, a.mul_v(V3::cst(c))));
+        assert!(same(a.mul_c(c), a.mul_v(V3::cst(c))));
     }
 }
