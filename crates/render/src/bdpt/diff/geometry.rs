@@ -162,7 +162,7 @@ impl<T: Real> PoseAt<T> {
     }
 
     /// The pose's origin plus `v`.
-    fn from_origin(self, v: V3<T>) -> V3<T> {
+    fn origin_plus(self, v: V3<T>) -> V3<T> {
         match self {
             Self::Fixed(p) => v.add_c(p.origin),
             Self::Moving(p) => p.origin + v,
@@ -170,7 +170,7 @@ impl<T: Real> PoseAt<T> {
     }
 
     /// `v` minus the pose's origin.
-    fn to_origin(self, v: V3<T>) -> V3<T> {
+    fn minus_origin(self, v: V3<T>) -> V3<T> {
         match self {
             Self::Fixed(p) => v.sub_c(p.origin),
             Self::Moving(p) => v - p.origin,
@@ -304,7 +304,7 @@ impl Camera {
             (V3::zero(), film.normalize_or_zero())
         };
         (
-            pose.from_origin(pose.to_world(origin)),
+            pose.origin_plus(pose.to_world(origin)),
             pose.to_world(dir),
             time,
         )
@@ -323,7 +323,7 @@ impl Camera {
         if cos.value() <= 0.0 {
             return None;
         }
-        let o = pose.to_camera(pose.to_origin(origin));
+        let o = pose.to_camera(pose.minus_origin(origin));
         let focal = if self.p.lens_radius > 0.0 {
             f64::from(self.p.focus_distance)
         } else {
@@ -362,7 +362,7 @@ impl Camera {
         time: T,
     ) -> Option<(V3<T>, T, V3<T>, (T, T), T)> {
         let pose = self.pose_at(time);
-        let p_lens = pose.from_origin(pose.to_world(self.lens_point(u)));
+        let p_lens = pose.origin_plus(pose.to_world(self.lens_point(u)));
         let to_lens = p_lens - reference;
         let dist2 = to_lens.length_squared();
         if !(dist2.value() > 0.0 && dist2.is_finite()) {
