@@ -117,6 +117,53 @@ impl<T: Real> V3<T> {
     pub fn max_element(self) -> T {
         self.x.max(self.y).max(self.z)
     }
+
+    /// The constant vector `c` (zero derivatives).
+    #[inline]
+    pub fn cst(c: V3<f64>) -> Self {
+        Self::new(T::cst(c.x), T::cst(c.y), T::cst(c.z))
+    }
+    /// Dot product with a constant vector: `self.dot(V3::cst(c))` with every product taken as
+    /// `T * f64`, which scales the derivatives instead of applying the product rule to a
+    /// constant's zero derivatives (same value; the same derivatives where every value is
+    /// finite, up to the sign of a zero).
+    #[inline]
+    pub fn dot_c(self, c: V3<f64>) -> T {
+        self.x * c.x + self.y * c.y + self.z * c.z
+    }
+    /// Cross product with a constant vector, `self x c` ([`V3::dot_c`]'s mixed products).
+    #[inline]
+    pub fn cross_c(self, c: V3<f64>) -> Self {
+        Self::new(
+            self.y * c.z - self.z * c.y,
+            self.z * c.x - self.x * c.z,
+            self.x * c.y - self.y * c.x,
+        )
+    }
+    /// Component-wise product with a constant vector ([`V3::dot_c`]'s mixed products).
+    #[inline]
+    pub fn mul_c(self, c: V3<f64>) -> Self {
+        Self::new(self.x * c.x, self.y * c.y, self.z * c.z)
+    }
+    /// Sum with a constant vector (the derivatives pass unchanged).
+    #[inline]
+    pub fn add_c(self, c: V3<f64>) -> Self {
+        Self::new(self.x + c.x, self.y + c.y, self.z + c.z)
+    }
+    /// Difference with a constant vector, `self - c` (the derivatives pass unchanged).
+    #[inline]
+    pub fn sub_c(self, c: V3<f64>) -> Self {
+        Self::new(self.x - c.x, self.y - c.y, self.z - c.z)
+    }
+}
+
+impl V3<f64> {
+    /// This constant vector times the scalar `s`: `V3::cst(self) * s` with the products taken
+    /// as `T * f64` ([`V3::dot_c`]).
+    #[inline]
+    pub fn times<T: Real>(self, s: T) -> V3<T> {
+        V3::new(s * self.x, s * self.y, s * self.z)
+    }
 }
 
 impl<T: Real> Add for V3<T> {

@@ -35,15 +35,70 @@ pub(super) struct Surface<T> {
 }
 
 impl<T: Real> Surface<T> {
-    fn color(&self, constant: glam::Vec3) -> V3<T> {
-        self.base.unwrap_or_else(|| V3::from_rgb(constant))
+    fn color(&self, constant: glam::Vec3) -> Rgb<T> {
+        match self.base {
+            Some(base) => Rgb::Varying(base),
+            None => Rgb::Constant(V3::from_rgb(constant)),
+        }
+    }
+}
+
+/// An RGB factor of a path (a BSDF value): a constant (an untextured colour), whose products
+/// with the path are mixed ([`V3::mul_c`], [`V3::times`]), or a colour over `T`.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Rgb<T> {
+    /// No derivatives.
+    Constant(V3<f64>),
+    /// With derivatives.
+    Varying(V3<T>),
+}
+
+impl<T: Real> Rgb<T> {
+    /// True if every value is zero.
+    pub(super) fn is_zero(self) -> bool {
+        match self {
+            Self::Constant(c) => c.is_zero(),
+            Self::Varying(v) => v.is_zero(),
+        }
+    }
+
+    /// The factor times the scalar `s`.
+    pub(super) fn times(self, s: T) -> V3<T> {
+        match self {
+            Self::Constant(c) => c.times(s),
+            Self::Varying(v) => v * s,
+        }
+    }
+
+    /// `v` times the factor, component-wise.
+    pub(super) fn apply(self, v: V3<T>) -> V3<T> {
+        match self {
+            Self::Constant(c) => v.mul_c(c),
+            Self::Varying(f) => v.mul_v(f),
+        }
+    }
+
+    /// The factor scaled by the constant `c`.
+    fn scale(self, c: f64) -> Self {
+        match self {
+            Self::Constant(k) => Self::Constant(k.scale(c)),
+            Self::Varying(v) => Self::Varying(v.scale(c)),
+        }
+    }
+
+    /// The factor as a vector over `T`.
+    fn over_t(self) -> V3<T> {
+        match self {
+            Self::Constant(c) => V3::cst(c),
+            Self::Varying(v) => v,
+        }
     }
 }
 
 /// A sampled direction (`crate::material::BsdfSample`).
 pub(super) struct Sample<T> {
     pub(super) wi: V3<T>,
-    pub(super) f: V3<T>,
+    pub(super) f: Rgb<T>,
     pub(super) pdf: T,
     pub(super) is_specular: bool,
 }
@@ -185,7 +240,7 @@ fn conductor_f<T: Real>(f0: V3<T>, ggx: Ggx, wo: V3<T>, wi: V3<T>, wm: V3<T>) ->
 }
 
 /// `Bsdf::eval` (no cosine; 0 for delta lobes).
-pub(super) fn eval<T: Real>(sf: &Surface<T>, wo: V3<T>, wi: V3<T>) -> V3<T> {
+pub(super) fn eval<T: Real>(sf: &Surface<T>, wo: V3<T>, wi: V3<T>) -> Rgb<T> {
     match &sf.bsdf {
         Bsdf::Lambertian(l) if same_hemisphere(wo, wi) => sf.color(l.albedo()).scale(1.0 / PI),
         Bsdf::RoughConductor(c) => {
@@ -193,11 +248,13 @@ pub(super) fn eval<T: Real>(sf: &Surface<T>, wo: V3<T>, wi: V3<T>) -> V3<T> {
                 alpha: f64::from(c.distribution().alpha()),
             };
             match conductor_upper(wo, wi) {
-                Some((wo, wi, wm)) => conductor_f(sf.color(c.f0()), ggx, wo, wi, wm),
-                None => V3::zero(),
+                Some((wo, wi, wm)) => {
+                    Rgb::Varying(conductor_f(sf.color(c.f0()).over_t(), ggx, wo, wi, wm))
+                }
+                None => Rgb::Constant(V3::zero()),
             }
         }
-        _ => V3::zero(),
+        _ => Rgb::Constant(V3::zero()),
     }
 }
 
@@ -248,7 +305,7 @@ pub(super) fn sample<T: Real>(
             let cos = wi.z.abs();
             Some(Sample {
                 wi,
-                f: fresnel_schlick(sf.color(c.f0()), cos) * cos.recip(),
+                f: Rgb::Varying(fresnel_schlick(sf.color(c.f0()).over_t(), cos) * cos.recip()),
                 pdf: T::cst(1.0),
                 is_specular: true,
             })
@@ -271,7 +328,13 @@ pub(super) fn sample<T: Real>(
             }
             Some(Sample {
                 wi: if flip { -wi_up } else { wi_up },
-                f: conductor_f(sf.color(c.f0()), ggx, wo_up, wi_up, wm),
+                f: Rgb::Varying(conductor_f(
+                    sf.color(c.f0()).over_t(),
+                    ggx,
+                    wo_up,
+                    wi_up,
+                    wm,
+                )),
                 pdf,
                 is_specular: false,
             })
@@ -285,7 +348,7 @@ pub(super) fn sample<T: Real>(
                 let wi = V3::new(-wo.x, -wo.y, wo.z);
                 return Some(Sample {
                     wi,
-                    f: V3::new(r, r, r) * wi.z.abs().recip(),
+                    f: Rgb::Varying(V3::new(r, r, r) * wi.z.abs().recip()),
                     pdf: r,
                     is_specular: true,
                 });
@@ -298,7 +361,7 @@ pub(super) fn sample<T: Real>(
                 TransportMode::Radiance => 1.0 / (etap * etap),
                 TransportMode::Importance => 1.0,
             };
-            let f = sf.color(d.tint()) * (t * scale / wi.z.abs());
+            let f = Rgb::Varying(sf.color(d.tint()).times(t * scale / wi.z.abs()));
             Some(Sample {
                 wi,
                 f,

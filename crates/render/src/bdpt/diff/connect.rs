@@ -27,7 +27,7 @@ impl Ctx<'_> {
         if s == 0 {
             let pt = &camera[t - 1];
             if pt.light.is_some() && t >= 2 {
-                l = self.emitted_towards(pt, camera[t - 2].p).mul_v(pt.beta);
+                l = pt.beta.mul_c(self.emitted_towards(pt, camera[t - 2].p));
             }
         } else if t == 1 {
             let qs = &light[s - 1];
@@ -38,12 +38,12 @@ impl Ctx<'_> {
                     self.camera.sample_wi(qs.p, uu, qs.time)
                 {
                     if pdf.value() > 0.0 && importance.value() > 0.0 {
-                        let forward = self.camera.pose_at(qs.time).forward;
+                        let frame = self.camera.pose_at(qs.time).frame();
                         let w = importance / pdf;
-                        let cam = Vertex::camera(p_lens, forward, V3::new(w, w, w), qs.time);
+                        let cam = Vertex::camera(p_lens, frame, V3::new(w, w, w), qs.time);
                         let mut contrib = qs
-                            .beta
-                            .mul_v(qs.f(&cam, TransportMode::Importance))
+                            .f(&cam, TransportMode::Importance)
+                            .apply(qs.beta)
                             .mul_v(cam.beta);
                         if qs.on_surface() && qs.kind == VertexKind::Surface {
                             contrib = contrib * wi.dot(qs.ns()).abs();
@@ -56,22 +56,22 @@ impl Ctx<'_> {
                 }
             }
         } else if s == 1 {
-            let pt = camera[t - 1];
+            let pt = &camera[t - 1];
             if pt.is_connectible() {
                 u.start(2);
                 let u_light = u.next();
                 let u_pos = u.next2();
-                if let Some(v) = self.sample_li(&pt, u_light, u_pos)? {
+                if let Some(v) = self.sample_li(pt, u_light, u_pos)? {
                     u.decide(u64::from(v.light.unwrap_or(u32::MAX)) << 32);
                     let wi = (v.p - pt.p).normalize_or_zero();
                     let mut contrib = pt
-                        .beta
-                        .mul_v(pt.f(&v, TransportMode::Radiance))
+                        .f(&v, TransportMode::Radiance)
+                        .apply(pt.beta)
                         .mul_v(v.beta);
                     if pt.kind == VertexKind::Surface {
                         contrib = contrib * wi.dot(pt.ns()).abs();
                     }
-                    if !contrib.is_zero() && self.visible(&pt, &v) {
+                    if !contrib.is_zero() && self.visible(pt, &v) {
                         l = contrib;
                         sampled = Some(v);
                     }
@@ -80,10 +80,10 @@ impl Ctx<'_> {
         } else {
             let (qs, pt) = (&light[s - 1], &camera[t - 1]);
             if qs.is_connectible() && pt.is_connectible() {
-                let contrib = qs
-                    .beta
-                    .mul_v(qs.f(pt, TransportMode::Importance))
-                    .mul_v(pt.f(qs, TransportMode::Radiance))
+                let from_light = qs.f(pt, TransportMode::Importance).apply(qs.beta);
+                let contrib = pt
+                    .f(qs, TransportMode::Radiance)
+                    .apply(from_light)
                     .mul_v(pt.beta);
                 if !contrib.is_zero() {
                     l = contrib * self.geometry_term(qs, pt);
@@ -128,15 +128,15 @@ impl Ctx<'_> {
         };
         let l = self.area(index)?;
         let [b0, b1, b2] = uniform_triangle(u_pos);
-        let [p0, p1, p2] = l.vertices.map(V3::<T>::from_a);
-        let p = p0 * b0 + p1 * b1 + p2 * b2;
+        let [p0, p1, p2] = l.vertices.map(V3::<f64>::from_a);
+        let p = p0.times(b0) + p1.times(b1) + p2.times(b2);
         let d = p - pt.p;
         let dist2 = d.length_squared();
         if !(dist2.value() > 0.0 && dist2.is_finite()) {
             return Ok(None);
         }
         let wi = d * dist2.sqrt().recip();
-        let cos_light = V3::from_a(l.normal).dot(wi).abs();
+        let cos_light = wi.dot_c(V3::from_a(l.normal)).abs();
         if cos_light.value() <= 0.0 {
             return Ok(None);
         }
@@ -152,7 +152,7 @@ impl Ctx<'_> {
             p,
             l.normal,
             index,
-            radiance * pdf.recip(),
+            radiance.times(pdf.recip()),
             T::cst(0.0),
             pt.time,
         );
@@ -196,48 +196,43 @@ impl Ctx<'_> {
         if s + t == 2 {
             return Ok(one);
         }
-        let mut qs = (s > 0).then(|| {
+        // The connection's endpoints, borrowed: their new reverse densities are kept apart
+        // (`pt_rev`, `qs_rev`) and both count as non-delta.
+        let qs = (s > 0).then(|| {
             if s == 1 {
-                *sampled.unwrap_or(&light[0])
+                sampled.unwrap_or(&light[0])
             } else {
-                light[s - 1]
+                &light[s - 1]
             }
         });
-        let mut pt = if t == 1 {
-            *sampled.unwrap_or(&camera[0])
+        let pt = if t == 1 {
+            sampled.unwrap_or(&camera[0])
         } else {
-            camera[t - 1]
+            &camera[t - 1]
         };
         let qs_minus = (s > 1).then(|| &light[s - 2]);
         let pt_minus = (t > 1).then(|| &camera[t - 2]);
-        pt.delta = false;
-        if let Some(q) = qs.as_mut() {
-            q.delta = false;
-        }
-        pt.pdf_rev = match (&qs, &pt_minus) {
-            (Some(q), _) => self.pdf(q, qs_minus, &pt)?,
+        let pt_rev = match (qs, &pt_minus) {
+            (Some(q), _) => self.pdf(q, qs_minus, pt)?,
             (None, Some(_)) => T::cst(match pt.light {
                 Some(l) => self.pdf_light_origin(l)?,
                 None => 0.0,
             }),
             (None, None) => T::cst(0.0),
         };
-        let pt_minus_rev = match (pt_minus, &qs) {
-            (Some(pm), Some(q)) => Some(self.pdf(&pt, Some(q), pm)?),
-            (Some(pm), None) => Some(self.pdf_light(&pt, pm)?),
+        let pt_minus_rev = match (pt_minus, qs) {
+            (Some(pm), Some(q)) => Some(self.pdf(pt, Some(q), pm)?),
+            (Some(pm), None) => Some(self.pdf_light(pt, pm)?),
             _ => None,
         };
-        let qs_rev = match &qs {
-            Some(q) => Some(self.pdf(&pt, pt_minus, q)?),
+        let qs_rev = match qs {
+            Some(q) => Some(self.pdf(pt, pt_minus, q)?),
             None => None,
         };
-        let qs_minus_rev = match (&qs, qs_minus) {
-            (Some(q), Some(qm)) => Some(self.pdf(q, Some(&pt), qm)?),
+        let qs_minus_rev = match (qs, qs_minus) {
+            (Some(q), Some(qm)) => Some(self.pdf(q, Some(pt), qm)?),
             _ => None,
         };
-        if let (Some(q), Some(r)) = (qs.as_mut(), qs_rev) {
-            q.pdf_rev = r;
-        }
         let remap0 = |f: T| if f.value() != 0.0 { f } else { one };
         let pow = |r: T| match heuristic {
             MisHeuristic::Balance => r,
@@ -247,7 +242,7 @@ impl Ctx<'_> {
         let mut ri = one;
         for i in (1..t).rev() {
             let (fwd, rev, delta) = if i == t - 1 {
-                (pt.pdf_fwd, pt.pdf_rev, pt.delta)
+                (pt.pdf_fwd, pt_rev, false)
             } else if i == t - 2 {
                 let v = &camera[i];
                 (v.pdf_fwd, pt_minus_rev.unwrap_or(v.pdf_rev), v.delta)
@@ -263,8 +258,8 @@ impl Ctx<'_> {
         ri = one;
         for i in (0..s).rev() {
             let (fwd, rev, delta) = if i == s - 1 {
-                qs.as_ref().map_or((T::cst(0.0), T::cst(0.0), false), |q| {
-                    (q.pdf_fwd, q.pdf_rev, q.delta)
+                qs.map_or((T::cst(0.0), T::cst(0.0), false), |q| {
+                    (q.pdf_fwd, qs_rev.unwrap_or(q.pdf_rev), false)
                 })
             } else if i + 2 == s {
                 let v = &light[i];

@@ -78,29 +78,50 @@ impl<T: Real> Frame<T> {
     }
 }
 
+impl Frame<f64> {
+    /// The constant frame over `T`.
+    pub(super) fn over_t<T: Real>(self) -> Frame<T> {
+        Frame {
+            s: V3::cst(self.s),
+            t: V3::cst(self.t),
+            n: V3::cst(self.n),
+        }
+    }
+
+    /// [`Frame::to_world`] of a constant frame: mixed products ([`V3::times`]).
+    pub(super) fn to_world_c<T: Real>(self, v: V3<T>) -> V3<T> {
+        self.s.times(v.x) + self.t.times(v.y) + self.n.times(v.z)
+    }
+}
+
 /// `crate::frame::shading_consistent`, on values.
-pub(super) fn shading_consistent<T: Real>(wo: V3<T>, wi: V3<T>, ng: V3<T>, ns: V3<T>) -> bool {
-    let geometric = wo.dot(ng).value() * wi.dot(ng).value();
+pub(super) fn shading_consistent<T: Real>(wo: V3<T>, wi: V3<T>, ng: V3<f64>, ns: V3<T>) -> bool {
+    let geometric = wo.dot_c(ng).value() * wi.dot_c(ng).value();
     let shading = wo.dot(ns).value() * wi.dot(ns).value();
     geometric != 0.0 && (geometric > 0.0) == (shading > 0.0)
 }
 
 /// Veach's shading-normal correction (`bdpt::vertex::shading_normal_correction`).
-pub(super) fn shading_normal_correction<T: Real>(wo: V3<T>, wi: V3<T>, ng: V3<T>, ns: V3<T>) -> T {
-    let denom = wo.dot(ng).abs() * wi.dot(ns).abs();
+pub(super) fn shading_normal_correction<T: Real>(
+    wo: V3<T>,
+    wi: V3<T>,
+    ng: V3<f64>,
+    ns: V3<T>,
+) -> T {
+    let denom = wo.dot_c(ng).abs() * wi.dot(ns).abs();
     if denom.value() == 0.0 {
         return T::cst(0.0);
     }
-    wo.dot(ns).abs() * wi.dot(ng).abs() / denom
+    wo.dot(ns).abs() * wi.dot_c(ng).abs() / denom
 }
 
 /// A camera pose (`crate::camera::CameraPose`).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Pose<T> {
-    pub(super) origin: V3<T>,
+    origin: V3<T>,
     right: V3<T>,
     up: V3<T>,
-    pub(super) forward: V3<T>,
+    forward: V3<T>,
 }
 
 impl<T: Real> Pose<T> {
@@ -109,6 +130,67 @@ impl<T: Real> Pose<T> {
     }
     fn to_camera(self, v: V3<T>) -> V3<T> {
         V3::new(v.dot(self.right), v.dot(self.up), v.dot(self.forward))
+    }
+}
+
+/// The camera pose at a time: the renderer's constant frame (a static camera, or a moving
+/// one at the shutter's opening), whose products with the path are mixed ([`V3::dot_c`]),
+/// or a pose over `T` that moves with the time.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum PoseAt<T> {
+    /// A constant pose.
+    Fixed(Pose<f64>),
+    /// A pose carrying the time's derivative.
+    Moving(Pose<T>),
+}
+
+impl<T: Real> PoseAt<T> {
+    /// Camera to world (a direction).
+    fn to_world(self, v: V3<T>) -> V3<T> {
+        match self {
+            Self::Fixed(p) => p.right.times(v.x) + p.up.times(v.y) + p.forward.times(v.z),
+            Self::Moving(p) => p.to_world(v),
+        }
+    }
+
+    /// World to camera (a direction).
+    fn to_camera(self, v: V3<T>) -> V3<T> {
+        match self {
+            Self::Fixed(p) => V3::new(v.dot_c(p.right), v.dot_c(p.up), v.dot_c(p.forward)),
+            Self::Moving(p) => p.to_camera(v),
+        }
+    }
+
+    /// The pose's origin plus `v`.
+    fn origin_plus(self, v: V3<T>) -> V3<T> {
+        match self {
+            Self::Fixed(p) => v.add_c(p.origin),
+            Self::Moving(p) => p.origin + v,
+        }
+    }
+
+    /// `v` minus the pose's origin.
+    fn minus_origin(self, v: V3<T>) -> V3<T> {
+        match self {
+            Self::Fixed(p) => v.sub_c(p.origin),
+            Self::Moving(p) => v - p.origin,
+        }
+    }
+
+    /// The frame about the viewing direction (a camera vertex's).
+    pub(super) fn frame(self) -> Frame<T> {
+        match self {
+            Self::Fixed(p) => Frame::from_normal(p.forward).over_t(),
+            Self::Moving(p) => Frame::from_normal(p.forward),
+        }
+    }
+
+    /// `forward . w`.
+    fn forward_dot(self, w: V3<T>) -> T {
+        match self {
+            Self::Fixed(p) => w.dot_c(p.forward),
+            Self::Moving(p) => p.forward.dot(w),
+        }
     }
 }
 
@@ -150,13 +232,13 @@ impl Camera {
 
     /// `Camera::pose_at`: the start pose's f32 frame for a static camera (as the renderer),
     /// else the interpolated look-at, differentiated with respect to time.
-    pub(super) fn pose_at<T: Real>(&self, time: T) -> Pose<T> {
-        let fixed = Pose {
+    pub(super) fn pose_at<T: Real>(&self, time: T) -> PoseAt<T> {
+        let fixed = PoseAt::Fixed(Pose {
             origin: V3::from_a(self.p.pose.origin),
             right: V3::from_a(self.p.pose.right),
             up: V3::from_a(self.p.pose.up),
             forward: V3::from_a(self.p.pose.forward),
-        };
+        });
         if !self.p.moving {
             return fixed;
         }
@@ -180,12 +262,12 @@ impl Camera {
         let Some(right) = forward.cross(V3::from_a(up)).try_normalize() else {
             return fixed;
         };
-        Pose {
+        PoseAt::Moving(Pose {
             origin,
             right,
             up: right.cross(forward),
             forward,
-        }
+        })
     }
 
     fn lens_point<T: Real>(&self, u: (T, T)) -> V3<T> {
@@ -222,7 +304,7 @@ impl Camera {
             (V3::zero(), film.normalize_or_zero())
         };
         (
-            pose.origin + pose.to_world(origin),
+            pose.origin_plus(pose.to_world(origin)),
             pose.to_world(dir),
             time,
         )
@@ -241,7 +323,7 @@ impl Camera {
         if cos.value() <= 0.0 {
             return None;
         }
-        let o = pose.to_camera(origin - pose.origin);
+        let o = pose.to_camera(pose.minus_origin(origin));
         let focal = if self.p.lens_radius > 0.0 {
             f64::from(self.p.focus_distance)
         } else {
@@ -280,7 +362,7 @@ impl Camera {
         time: T,
     ) -> Option<(V3<T>, T, V3<T>, (T, T), T)> {
         let pose = self.pose_at(time);
-        let p_lens = pose.origin + pose.to_world(self.lens_point(u));
+        let p_lens = pose.origin_plus(pose.to_world(self.lens_point(u)));
         let to_lens = p_lens - reference;
         let dist2 = to_lens.length_squared();
         if !(dist2.value() > 0.0 && dist2.is_finite()) {
@@ -290,7 +372,7 @@ impl Camera {
         let hit = self.ray_to_raster(p_lens, -wi, time)?;
         let cos2 = hit.cos * hit.cos;
         let importance = (cos2 * cos2 * (self.film_area() * self.lens_area())).recip();
-        let cos_lens = pose.forward.dot(wi).abs();
+        let cos_lens = pose.forward_dot(wi).abs();
         let pdf = dist2 / (cos_lens * self.lens_area());
         (pdf.is_finite() && importance.value() > 0.0)
             .then_some((wi, pdf, p_lens, hit.raster, importance))
@@ -300,14 +382,17 @@ impl Camera {
 /// A surface point re-intersected on a known triangle.
 pub(super) struct TriangleHit<T> {
     pub(super) p: V3<T>,
-    pub(super) ng: V3<T>,
+    /// The triangle's geometric normal: a constant.
+    pub(super) ng: V3<f64>,
     pub(super) ns: V3<T>,
     pub(super) bary: (T, T),
 }
 
 /// Intersects the ray `origin + t dir` with triangle `tri` of `mesh` (Moller-Trumbore, no
 /// range test: the f32 BVH already chose the triangle) and interpolates position and shading
-/// normal as `Scene::intersect` does. `None` for a ray parallel to the triangle.
+/// normal as `Scene::intersect` does. `None` for a ray parallel to the triangle. The
+/// triangle's vertices and normals are constants: every product with one is a mixed product
+/// ([`V3::dot_c`]).
 pub(super) fn intersect_triangle<T: Real>(
     mesh: &Mesh,
     tri: usize,
@@ -316,38 +401,40 @@ pub(super) fn intersect_triangle<T: Real>(
 ) -> Option<TriangleHit<T>> {
     let [i0, i1, i2] = mesh.triangles.get(tri)?.map(|i| i as usize);
     let (p0, p1, p2) = (
-        V3::<T>::from_a(mesh.positions[i0]),
-        V3::<T>::from_a(mesh.positions[i1]),
-        V3::<T>::from_a(mesh.positions[i2]),
+        V3::<f64>::from_a(mesh.positions[i0]),
+        V3::<f64>::from_a(mesh.positions[i1]),
+        V3::<f64>::from_a(mesh.positions[i2]),
     );
     let (e1, e2) = (p1 - p0, p2 - p0);
-    let pvec = dir.cross(e2);
-    let det = e1.dot(pvec);
+    let pvec = dir.cross_c(e2);
+    let det = pvec.dot_c(e1);
     if det.value().abs() < 1e-300 {
         return None;
     }
     let inv = det.recip();
-    let tvec = origin - p0;
+    let tvec = origin.sub_c(p0);
     let b1 = tvec.dot(pvec) * inv;
-    let qvec = tvec.cross(e1);
+    let qvec = tvec.cross_c(e1);
     let b2 = dir.dot(qvec) * inv;
     let b0 = (-(b1 + b2) + 1.0).max_c(0.0);
-    let p = p0 * b0 + p1 * b1 + p2 * b2;
-    let ng = V3::<T>::from_a(
+    let p = p0.times(b0) + p1.times(b1) + p2.times(b2);
+    let ng = V3::<f64>::from_a(
         (mesh.positions[i1] - mesh.positions[i0])
             .cross(mesh.positions[i2] - mesh.positions[i0])
             .normalize_or_zero(),
     );
     let n = &mesh.normals;
     let ns = if n.len() > i0.max(i1).max(i2) {
-        let ns = V3::from_a(n[i0]) * b0 + V3::from_a(n[i1]) * b1 + V3::from_a(n[i2]) * b2;
+        let ns = V3::<f64>::from_a(n[i0]).times(b0)
+            + V3::<f64>::from_a(n[i1]).times(b1)
+            + V3::<f64>::from_a(n[i2]).times(b2);
         match ns.try_normalize() {
-            Some(ns) if ns.dot(ng).value() < 0.0 => -ns,
+            Some(ns) if ns.dot_c(ng).value() < 0.0 => -ns,
             Some(ns) => ns,
-            None => ng,
+            None => V3::cst(ng),
         }
     } else {
-        ng
+        V3::cst(ng)
     };
     Some(TriangleHit {
         p,

@@ -10,7 +10,7 @@
 use glam::{Vec2, Vec3A};
 
 use super::bsdf;
-use super::geometry::Camera;
+use super::geometry::{Camera, Frame};
 use super::vertex::Vertex;
 use crate::autodiff::{Real, V3};
 use crate::bdpt::{MisHeuristic, VertexKind};
@@ -114,13 +114,13 @@ impl Ctx<'_> {
 
     /// Radiance light `l` emits at barycentrics `bary` towards `dir` (`Scene::area_le`): a
     /// constant (texture lookups do not carry derivatives), zero behind one-sided lights.
-    pub(super) fn area_le<T: Real>(&self, l: u32, bary: (T, T), dir: V3<T>) -> V3<T> {
+    pub(super) fn area_le<T: Real>(&self, l: u32, bary: (T, T), dir: V3<T>) -> V3<f64> {
         let b = Vec2::new(bary.0.value() as f32, bary.1.value() as f32);
         V3::from_rgb(self.scene.area_le(l, b, dir.to_a()))
     }
 
-    /// `Vertex::emitted_towards` for area lights.
-    pub(super) fn emitted_towards<T: Real>(&self, v: &Vertex<T>, towards: V3<T>) -> V3<T> {
+    /// `Vertex::emitted_towards` for area lights (a constant).
+    pub(super) fn emitted_towards<T: Real>(&self, v: &Vertex<T>, towards: V3<T>) -> V3<f64> {
         match v.light {
             Some(l) => self.area_le(l, v.bary, (towards - v.p).normalize_or_zero()),
             None => V3::zero(),
@@ -140,7 +140,7 @@ impl Ctx<'_> {
         let w = w * d2.sqrt().recip();
         let mut pdf = self.light_pdf_dir(light, w)? / d2;
         if next.on_surface() {
-            pdf *= next.ng.dot(w).abs();
+            pdf *= w.dot_c(next.ng).abs();
         }
         Ok(pdf)
     }
@@ -148,7 +148,7 @@ impl Ctx<'_> {
     /// `Lights::pdf_le`'s directional density for an area light.
     fn light_pdf_dir<T: Real>(&self, light: u32, dir: V3<T>) -> Result<T, Stop> {
         let l = self.area(light)?;
-        let cos = V3::from_a(l.normal).dot(dir);
+        let cos = dir.dot_c(V3::from_a(l.normal));
         Ok(if l.two_sided {
             cos.abs() * (0.5 / std::f64::consts::PI)
         } else {
@@ -217,7 +217,8 @@ impl Ctx<'_> {
             raster.0 * f64::from(image_size.x),
             raster.1 * f64::from(image_size.y),
         );
-        let blank = Vertex::camera(V3::zero(), V3::from_a(Vec3A::Z), V3::zero(), T::cst(0.0));
+        let z = Frame::<f64>::from_normal(V3::from_a(Vec3A::Z)).over_t();
+        let blank = Vertex::camera(V3::zero(), z, V3::zero(), T::cst(0.0));
         // One array for both subpaths (`s + t <= MAX_DIFF_VERTICES`): half the vertices to
         // initialise, and a vertex of dual numbers is large.
         let mut vertices = [blank; MAX_DIFF_VERTICES];

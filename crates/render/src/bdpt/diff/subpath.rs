@@ -94,7 +94,7 @@ impl Ctx<'_> {
                 break;
             }
             let cos = bs.wi.z.abs();
-            let mut factor = bs.f * (cos / bs.pdf);
+            let mut factor = bs.f.times(cos / bs.pdf);
             if mode == TransportMode::Importance {
                 factor = factor * shading_normal_correction(v.wo, wi, v.ng, v.ns());
             }
@@ -136,7 +136,7 @@ impl Ctx<'_> {
         let pdf_dir = self.camera.pdf_dir(origin, dir, time);
         path[0] = Vertex::camera(
             origin,
-            self.camera.pose_at(time).forward,
+            self.camera.pose_at(time).frame(),
             V3::splat(1.0),
             time,
         );
@@ -178,8 +178,8 @@ impl Ctx<'_> {
         u.decide(u64::from(le.light) << 32);
         let l = self.area(le.light)?;
         let [b0, b1, b2] = uniform_triangle(u_pos);
-        let [p0, p1, p2] = l.vertices.map(V3::<T>::from_a);
-        let p = p0 * b0 + p1 * b1 + p2 * b2;
+        let [p0, p1, p2] = l.vertices.map(V3::<f64>::from_a);
+        let p = p0.times(b0) + p1.times(b1) + p2.times(b2);
         let (mut n, mut side_pdf) = (l.normal, 1.0);
         if l.two_sided {
             side_pdf = 0.5;
@@ -192,20 +192,27 @@ impl Ctx<'_> {
             u_dir.0 = u_dir.0.min_c(f64::from(1.0 - f32::EPSILON / 2.0));
         }
         let local = cosine_hemisphere(u_dir);
-        let dir = Frame::from_normal(V3::from_a(n))
-            .to_world(local)
+        let dir = Frame::<f64>::from_normal(V3::from_a(n))
+            .to_world_c(local)
             .normalize_or_zero();
         let pdf_pos = self.pdf_light_origin(le.light)?;
         let pdf_dir = cosine_hemisphere_pdf(local.z) * side_pdf;
-        let cos = V3::from_a(n).dot(dir).abs();
-        let radiance = V3::<T>::from_rgb(le.radiance);
+        let cos = dir.dot_c(V3::from_a(n)).abs();
+        let radiance = V3::<f64>::from_rgb(le.radiance);
         if pdf_pos <= 0.0 || pdf_dir.value() <= 0.0 || radiance.is_zero() {
             return Ok(0);
         }
-        let mut v = Vertex::light(p, l.normal, le.light, radiance, T::cst(pdf_pos), time);
+        let mut v = Vertex::light(
+            p,
+            l.normal,
+            le.light,
+            V3::cst(radiance),
+            T::cst(pdf_pos),
+            time,
+        );
         v.bary = (b1, b2);
         path[0] = v;
-        let beta = radiance * (cos / (pdf_dir * pdf_pos));
+        let beta = radiance.times(cos / (pdf_dir * pdf_pos));
         Ok(1 + self.random_walk(
             dir,
             u,

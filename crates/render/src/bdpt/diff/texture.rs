@@ -42,19 +42,21 @@ pub(super) fn base_color<T: Real>(scene: &Scene, tri: usize, bary: (T, T)) -> Op
             + f64::from(m.translation.y),
     );
     let fp = texture.footprint(Vec2::new(uv.0.value() as f32, uv.1.value() as f32))?;
-    let [t00, t10, t01, t11] = fp.texels.map(V3::<T>::from_rgb);
+    let [t00, t10, t01, t11] = fp.texels.map(V3::<f64>::from_rgb);
     let tex = if fp.bilinear {
         let fx = uv.0 * fp.size[0] - 0.5 - fp.origin[0];
         let fy = uv.1 * fp.size[1] - 0.5 - fp.origin[1];
+        // Texels are constants: the row lerps take mixed products.
+        let lerp_c = |p: V3<f64>, q: V3<f64>, f: T| (q - p).times(f).add_c(p);
         let lerp = |p: V3<T>, q: V3<T>, f: T| p + (q - p) * f;
-        lerp(lerp(t00, t10, fx), lerp(t01, t11, fx), fy)
+        lerp(lerp_c(t00, t10, fx), lerp_c(t01, t11, fx), fy)
     } else {
-        t00
+        V3::cst(t00)
     };
     let vertex_color = mesh
         .color_at(tri, Vec2::new(b1.value() as f32, b2.value() as f32))
         .truncate();
-    let base = V3::<T>::from_rgb(material.base_color * vertex_color).mul_v(tex);
+    let base = tex.mul_c(V3::from_rgb(material.base_color * vertex_color));
     Some(V3::new(
         base.x.clamp_c(0.0, 1.0),
         base.y.clamp_c(0.0, 1.0),

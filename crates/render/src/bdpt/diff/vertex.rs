@@ -3,7 +3,7 @@
 
 use glam::Vec3A;
 
-use super::bsdf;
+use super::bsdf::{self, Rgb};
 use super::geometry::{shading_consistent, shading_normal_correction, Frame};
 use crate::autodiff::{Real, V3};
 use crate::bdpt::VertexKind;
@@ -18,7 +18,8 @@ pub(super) struct Vertex<T> {
     pub(super) p: V3<T>,
     /// f32 error bound of `p` for ray offsets.
     pub(super) p_error: Vec3A,
-    pub(super) ng: V3<T>,
+    /// The geometric normal: a constant (a triangle's, a light's; zero at the camera).
+    pub(super) ng: V3<f64>,
     pub(super) frame: Frame<T>,
     pub(super) wo: V3<T>,
     pub(super) bsdf: Option<bsdf::Surface<T>>,
@@ -44,7 +45,7 @@ impl<T: Real> Vertex<T> {
             kind: self.kind,
             p: values3(self.p),
             p_error: self.p_error,
-            ng: values3(self.ng),
+            ng: self.ng,
             frame: super::geometry::Frame {
                 s: values3(self.frame.s),
                 t: values3(self.frame.t),
@@ -65,14 +66,14 @@ impl<T: Real> Vertex<T> {
         }
     }
 
-    pub(super) fn camera(p: V3<T>, forward: V3<T>, beta: V3<T>, time: T) -> Self {
+    pub(super) fn camera(p: V3<T>, frame: Frame<T>, beta: V3<T>, time: T) -> Self {
         let zero = T::cst(0.0);
         Self {
             kind: VertexKind::Camera,
             p,
             p_error: Vec3A::ZERO,
             ng: V3::zero(),
-            frame: Frame::from_normal(forward),
+            frame,
             wo: V3::zero(),
             bsdf: None,
             light: None,
@@ -87,17 +88,18 @@ impl<T: Real> Vertex<T> {
 
     pub(super) fn light(p: V3<T>, n: Vec3A, light: u32, beta: V3<T>, pdf_fwd: T, time: T) -> Self {
         let zero = T::cst(0.0);
-        let n3 = V3::from_a(n);
+        let ng = V3::from_a(n);
         Self {
             kind: VertexKind::Light,
             p,
             p_error: p.to_a().abs() * 1e-6,
-            ng: n3,
+            ng,
             frame: Frame::from_normal(if n == Vec3A::ZERO {
                 V3::from_a(Vec3A::Z)
             } else {
-                n3
-            }),
+                ng
+            })
+            .over_t(),
             wo: V3::zero(),
             bsdf: None,
             light: Some(light),
@@ -142,17 +144,18 @@ impl<T: Real> Vertex<T> {
     }
 
     /// `Vertex::f`.
-    pub(super) fn f(&self, next: &Self, mode: TransportMode) -> V3<T> {
+    pub(super) fn f(&self, next: &Self, mode: TransportMode) -> Rgb<T> {
+        let zero = Rgb::Constant(V3::zero());
         let Some(b) = self.bsdf else {
-            return V3::zero();
+            return zero;
         };
         let wi = (next.p - self.p).normalize_or_zero();
         if !shading_consistent(self.wo, wi, self.ng, self.ns()) {
-            return V3::zero();
+            return zero;
         }
         let f = bsdf::eval(&b, self.frame.to_local(self.wo), self.frame.to_local(wi));
         if mode == TransportMode::Importance && !f.is_zero() {
-            f * shading_normal_correction(self.wo, wi, self.ng, self.ns())
+            Rgb::Varying(f.times(shading_normal_correction(self.wo, wi, self.ng, self.ns())))
         } else {
             f
         }
@@ -168,7 +171,7 @@ impl<T: Real> Vertex<T> {
         let inv_d2 = d2.recip();
         let mut pdf = pdf;
         if next.on_surface() {
-            pdf *= next.ng.dot(w * inv_d2.sqrt()).abs();
+            pdf *= (w * inv_d2.sqrt()).dot_c(next.ng).abs();
         }
         pdf * inv_d2
     }
