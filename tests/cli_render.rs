@@ -186,16 +186,11 @@ fn direct_pass_parts_add_up_to_the_image() {
         assert!(output.status.success(), "{}", stderr(&output));
         output
     };
-    let pssmlt = [
-        "--integrator",
-        "pssmlt",
-        "--bootstrap-samples",
-        "2000",
-    ];
+    let pssmlt = ["--integrator", "pssmlt", "--bootstrap-samples", "2000"];
     render(&pssmlt, "p.exr");
-    let image = read_exr(&dir.join("p.exr")).unwrap();
-    let direct = read_exr(&dir.join("p_direct.exr")).unwrap();
-    let chains = read_exr(&dir.join("p_chains.exr")).unwrap();
+    let image = read_exr(dir.join("p.exr")).unwrap();
+    let direct = read_exr(dir.join("p_direct.exr")).unwrap();
+    let chains = read_exr(dir.join("p_chains.exr")).unwrap();
     assert!(direct.mean_luminance() > 0.0 && chains.mean_luminance() > 0.0);
     for ((sum, d), c) in image.pixels.iter().zip(&direct.pixels).zip(&chains.pixels) {
         for k in 0..3 {

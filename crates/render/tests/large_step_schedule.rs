@@ -89,6 +89,9 @@ fn the_code_schedule_switches_after_a_tenth_of_each_chain() {
     for p in [0.2, 0.05] {
         let z = schedule_z(&run(LargeStepMode::Fixed(p)));
         eprintln!("fixed {p}: z = {z:.2}");
-        assert!(z.abs() > 5.0, "fixed {p} passes for the schedule: z = {z:.2}");
+        assert!(
+            z.abs() > 5.0,
+            "fixed {p} passes for the schedule: z = {z:.2}"
+        );
     }
 }

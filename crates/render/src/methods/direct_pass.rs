@@ -6,7 +6,8 @@ use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use super::{
-    relative_error, unsampled_note, DirectParts, DirectPassStats, RenderOutput, RenderSettings, Run, Unsampled,
+    relative_error, unsampled_note, DirectParts, DirectPassStats, RenderOutput, RenderSettings,
+    Run, Unsampled,
 };
 use crate::bdpt::{BdptOutput, BdptParams};
 use crate::budget::Budget;

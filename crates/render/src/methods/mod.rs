@@ -51,9 +51,8 @@ pub use lqmc::LqmcSettings;
 pub use mala::MalaSettings;
 pub use mmlt::MmltSettings;
 pub use output::{
-    mcmc_notes, mcmc_output, relative_error, unsampled_note, DirectParts, DirectPassStats, LqmcStats,
-    McmcStats,
-    PhaseTimes, RenderOutput, Unsampled, BRIGHTNESS_TARGET,
+    mcmc_notes, mcmc_output, relative_error, unsampled_note, DirectParts, DirectPassStats,
+    LqmcStats, McmcStats, PhaseTimes, RenderOutput, Unsampled, BRIGHTNESS_TARGET,
 };
 pub use pathmlt::PathMltSettings;
 pub use pssmlt::{
