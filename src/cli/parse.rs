@@ -181,7 +181,14 @@ mod tests {
                 then: 0.2
             })
         );
-        for bad in ["0.05,", ",0.2", "0.05,1.5", "0.05,0.2,0.3", "-1,0.2", "often"] {
+        for bad in [
+            "0.05,",
+            ",0.2",
+            "0.05,1.5",
+            "0.05,0.2,0.3",
+            "-1,0.2",
+            "often",
+        ] {
             let err = large_step(bad).expect_err(bad);
             assert!(err.contains("P1,P2"), "{bad}: {err}");
         }
