@@ -57,8 +57,7 @@ pub(super) fn set_up_estimation(loop_settings: &mut LoopSettings, estimation_ste
 }
 
 /// Warm-up of [`crate::mlt::LargeStepMode::Schedule`] under a time budget, in mutations per
-/// chain: a chain's length is not known in advance there, so the warm-up is a fixed count
-/// (about a tenth of a chain in the 30 s renders of the Langevin tables).
+/// chain: a chain's length is not known in advance there, so the warm-up is a fixed count.
 pub const TIME_BUDGET_WARM_UP_STEPS: u64 = 1000;
 
 /// Mutations per chain of a [`crate::mlt::LargeStepMode::Schedule`] warm-up: the first
