@@ -60,6 +60,19 @@ impl RegionTable {
         self.regions.get(k).map(decode)
     }
 
+    /// Reads the first and last word of every region in `regions` (ignoring ids `>= len()`), with
+    /// nothing depending on one read before the next is issued: the cache misses of many
+    /// scattered regions overlap instead of following one another. Changes nothing.
+    pub(super) fn touch(&self, regions: impl Iterator<Item = usize>) {
+        let mut any = 0u64;
+        for k in regions {
+            if let Some(e) = self.regions.get(k) {
+                any ^= e[0] ^ e[5];
+            }
+        }
+        std::hint::black_box(any);
+    }
+
     /// Applies `f` to the state of region `k` (`None` if `k >= len()`).
     #[inline]
     pub(super) fn update<T>(

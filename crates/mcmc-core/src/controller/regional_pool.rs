@@ -33,6 +33,9 @@ pub struct PooledRegionalScales<Sc> {
     /// Regions whose visit count reached `L` this round (updated at the synchronisation
     /// point, so a round costs O(visited regions), not O(regions)).
     due: Vec<u32>,
+    /// The round's visits of every chain, in job and chain order, replayed at the
+    /// synchronisation point.
+    pending: Vec<Visit>,
 }
 
 impl<Sc> Default for PooledRegionalScales<Sc> {
@@ -49,6 +52,7 @@ impl<Sc> Default for PooledRegionalScales<Sc> {
             frozen: false,
             updates_every: u64::MAX,
             due: Vec::new(),
+            pending: Vec::new(),
         }
     }
 }
@@ -60,7 +64,8 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         self.sigmas.as_ref()
     }
 
-    /// Alg. 1's state of region `k` and its visits since the last refinement.
+    /// Alg. 1's state of region `k` and its visits since the last refinement, as of the last
+    /// synchronisation point.
     #[must_use]
     pub fn region_stats(&self, k: usize) -> Option<RegionStats> {
         self.regions.get(k)
@@ -117,24 +122,37 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
         self.frozen = params.freeze_after_mutations == Some(0);
     }
 
-    /// Adds one chain's visits of the round, in order (Alg. 1 lines 11-18).
+    /// Adds one chain's visits of the round, in order, to the round's record; they are
+    /// replayed at the synchronisation point ([`Self::end_round`]) in the order the chains
+    /// contributed them.
+    pub(super) fn apply(&mut self, visits: &[Visit], steps: u64) {
+        self.mutations += steps;
+        if self.sigmas.is_some() && self.params.is_some() && !self.frozen {
+            self.pending.extend_from_slice(visits);
+        }
+    }
+
+    /// Replays the round's visits, in order (Alg. 1 lines 11-18).
     ///
     /// With [`RegionalUpdateRule::EveryLVisits`] every `L`-th proposal from a region makes
     /// its sign step here, with the `lambda` left by the previous step: the pooled records,
     /// fed chain after chain in job order, go through exactly the sequential rule
     /// ([`super::AdaptState::record`]). With [`RegionalUpdateRule::OncePerRound`] the region
-    /// is only marked due and steps once at [`Self::end_round`].
-    pub(super) fn apply(&mut self, visits: &[Visit], steps: u64) {
-        self.mutations += steps;
+    /// is only marked due and steps once at [`Self::update_scales`].
+    ///
+    /// The visited regions' states are first read all at once
+    /// ([`RegionTable::touch`]), so that a partition with many regions (the 4-D grid's 10^6,
+    /// whose states do not stay in the cache) waits for their cache misses side by side
+    /// rather than one visit after another; the updates then follow in order.
+    fn replay(&mut self) {
+        let visits = std::mem::take(&mut self.pending);
         let (Some(sigmas), Some(params)) = (self.sigmas.as_mut(), self.params.as_ref()) else {
             return;
         };
-        if self.frozen {
-            return;
-        }
+        self.regions.touch(visits.iter().map(|v| v.region as usize));
         let every_l = params.update_rule == RegionalUpdateRule::EveryLVisits;
         let updates_every = self.updates_every;
-        for v in visits {
+        for v in &visits {
             let k = v.region as usize;
             let due = self.regions.update(k, |state| {
                 state.visits_since_refine += 1;
@@ -162,6 +180,8 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
                 None => debug_assert!(false, "visit to region {k} of {}", self.regions.len()),
             }
         }
+        self.pending = visits;
+        self.pending.clear();
     }
 
     /// [`RegionalUpdateRule::OncePerRound`]: Alg. 1 lines 13-18 at the synchronisation point,
@@ -195,8 +215,10 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
             return;
         };
         if self.frozen {
+            self.pending.clear();
             return;
         }
+        self.replay();
         self.update_scales();
         let Some(sigmas) = self.sigmas.as_mut() else {
             return;
