@@ -66,10 +66,25 @@ impl Vertex {
 /// every specular vertex's successor is the first hit along its specular direction, `x_1` is
 /// the camera origin and `x_k` lies on an emitter. [`Path::contribution`] trusts them (it casts
 /// no rays); [`Path::check_valid`] verifies them for tests.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Debug, Default, PartialEq)]
 pub struct Path {
     /// The vertices, camera first.
     pub vertices: Vec<Vertex>,
+}
+
+impl Clone for Path {
+    fn clone(&self) -> Self {
+        Self {
+            vertices: self.vertices.clone(),
+        }
+    }
+
+    /// Copies `source` into `self`'s vertex storage: a proposal's `y.clone_from(x)` allocates
+    /// nothing once `y` has held a path as long (a derived `clone_from` would build a new
+    /// vector every step).
+    fn clone_from(&mut self, source: &Self) {
+        self.vertices.clone_from(&source.vertices);
+    }
 }
 
 impl mcmc_core::Point for Path {}
