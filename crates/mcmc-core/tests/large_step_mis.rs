@@ -17,8 +17,6 @@
 //! [`SPLAT_TESTS`] checks that must pass run at the Sidak level for an overall 0.01; a broken
 //! weighting counts as caught below [`OVERWHELMING`] = 1e-6.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::sync::atomic::AtomicBool;
 
 use mcmc_core::delayed_rejection::IndependentSecondStage;
@@ -27,8 +25,8 @@ use mcmc_core::render_loop::{
     Splat, SplatGrid, SplatObserver,
 };
 use mcmc_core::testing::{
-    toy_splat_weight_test, LargeStepWalk, MisWithStaleProbability, MisWithoutLargeStepTerm,
-    SplatParams, SplatWeightReport,
+    toy_splat_weight_test, CountingAllocator, LargeStepWalk, MisWithStaleProbability,
+    MisWithoutLargeStepTerm, SplatParams, SplatWeightReport,
 };
 use mcmc_core::toy::{PiecewiseConstant, ToyTarget, UniformMixture};
 use mcmc_core::{
@@ -36,27 +34,8 @@ use mcmc_core::{
 };
 use rand::SeedableRng;
 
-/// Counts allocations per thread, to show a step of the wrapped kernel allocates nothing.
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|a| a.set(a.get() + 1));
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: CountingAllocator = CountingAllocator;
 
 /// Splat-weight checks in this file that must pass (Sidak correction). Keep in sync.
 const SPLAT_TESTS: usize = 7;
@@ -352,7 +331,7 @@ fn a_step_allocates_nothing() {
     let mut grid = SplatGrid::new(4, 1);
     let mut observer = SplatObserver::new(&mut grid);
     chain.run(100, &mut observer).unwrap();
-    let before = ALLOCATIONS.with(Cell::get);
+    let before = CountingAllocator::allocations();
     chain.run(10_000, &mut observer).unwrap();
-    assert_eq!(ALLOCATIONS.with(Cell::get), before);
+    assert_eq!(CountingAllocator::allocations(), before);
 }

@@ -6,42 +6,14 @@
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
+use mcmc_core::testing::CountingAllocator;
 use mcmc_core::{Chain, Mh, NoAdaptation, Proposal, Proposed};
 use pathspace::analytic::AnalyticScene;
-use pathspace::{
-    ra_mixture, FixedScale, Path, PathTarget, Perturbation, PerturbationKind, UnidirectionalParams,
-    UnidirectionalSampler,
-};
+use pathspace::{ra_mixture, FixedScale, Path, PathTarget, Perturbation, PerturbationKind};
 use rand::Rng;
 
-/// Counts allocations per thread.
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|a| a.set(a.get() + 1));
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(Cell::get)
-}
+static ALLOCATOR: CountingAllocator = CountingAllocator;
 
 /// Steps before counting (every buffer reaches its size) and steps counted.
 const WARM_UP: usize = 2_000;
@@ -67,30 +39,18 @@ fn counted<K: mcmc_core::Kernel<PathTarget<'static, AnalyticScene>>>(
     seed: u64,
 ) -> usize {
     let target = PathTarget::new(scene);
-    let sampler = UnidirectionalSampler::new(
-        scene,
-        UnidirectionalParams {
-            max_segments: 4,
-            connect_probability: 0.5,
-        },
-    )
-    .unwrap();
+    let sampler = common::unidirectional(scene, 4);
     let mut rng = common::rng(seed);
-    let x0 = loop {
-        let p = common::draw(&sampler, &mut rng);
-        if p.contribution(scene).luminance() > 0.0 {
-            break p;
-        }
-    };
+    let x0 = common::lit_path(scene, &sampler, &mut rng);
     let mut chain = Chain::new(&target, kernel, NoAdaptation, rng, x0).unwrap();
     for _ in 0..WARM_UP {
         chain.step(&mut ()).unwrap();
     }
-    let before = allocations();
+    let before = CountingAllocator::allocations();
     for _ in 0..COUNTED {
         chain.step(&mut ()).unwrap();
     }
-    allocations() - before
+    CountingAllocator::allocations() - before
 }
 
 fn scene() -> &'static AnalyticScene {

@@ -577,12 +577,7 @@ fn learned_halves(partition: Part) -> [f64; 2] {
     let (mut sum, mut count) = ([0.0; 2], [0u64; 2]);
     for c in 0..16 {
         let mut rng = common::rng(500 + c);
-        let x0 = loop {
-            let p = common::draw(&smp, &mut rng);
-            if p.contribution(scene).luminance() > 0.0 {
-                break p;
-            }
-        };
+        let x0 = common::lit_path(scene, &smp, &mut rng);
         let mut chain = Chain::new(&target, k.clone(), NoAdaptation, rng, x0).unwrap();
         for _ in 0..6000 {
             let half = usize::from(chain.state().raster(scene).unwrap()[0] >= 0.5);

@@ -15,7 +15,7 @@ use pathspace::regional::{
 };
 use pathspace::{
     ra_mixture, BidirectionalMutation, Path, PathMutation, PathTarget, PerturbOrGlobal,
-    Perturbation, PerturbationKind, ScaleSource, UnidirectionalParams, UnidirectionalSampler,
+    Perturbation, PerturbationKind, ScaleSource,
 };
 
 type Part<'a> = PathPartition<&'a AnalyticScene>;
@@ -80,14 +80,7 @@ fn run<C: Controller<Kernel, Path>>(
     let part = partition(scene, kind);
     let sigmas =
         SharedSigmas::new(RegionalSigmas::new(part.clone(), (0.05f64).ln() * 2.0, 1.0).unwrap());
-    let sampler = UnidirectionalSampler::new(
-        scene,
-        UnidirectionalParams {
-            max_segments: 4,
-            connect_probability: 0.5,
-        },
-    )
-    .unwrap();
+    let sampler = common::unidirectional(scene, 4);
     let bidir = common::bidirectional(scene, 4);
     let (mut known, mut wrong, mut moved) = (0, 0, 0);
     for c in 0..8 {
@@ -95,12 +88,7 @@ fn run<C: Controller<Kernel, Path>>(
             ra_mixture(kind, Perturbation::new(scene, kind, sigmas.clone()), bidir).unwrap(),
         );
         let mut rng = common::rng(40 + c);
-        let x0 = loop {
-            let p = common::draw(&sampler, &mut rng);
-            if p.contribution(scene).luminance() > 0.0 {
-                break p;
-            }
-        };
+        let x0 = common::lit_path(scene, &sampler, &mut rng);
         let controller = make(params);
         let mut chain = Chain::new(&target, kernel, controller, rng, x0).unwrap();
         let mut before = part.region(chain.state());

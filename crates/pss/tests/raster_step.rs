@@ -41,15 +41,13 @@
 //! the Sidak level for an overall 0.01; a broken kernel counts as caught below
 //! [`OVERWHELMING`] = 1e-6. Seeds are fixed: deterministic.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use mcmc_core::seed::mix64;
 use mcmc_core::testing::{
     assert_finite_state_balance, assert_hastings_consistent, assert_path_balance,
-    assert_symmetric_proposal, grid_centres, sidak_alpha, ChiSquareReport, PairwiseParams,
-    StationarityParams, ALPHA,
+    assert_symmetric_proposal, grid_centres, sidak_alpha, ChiSquareReport, CountingAllocator,
+    PairwiseParams, StationarityParams, ALPHA,
 };
 use mcmc_core::toy::{Bins, PiecewiseConstant, TorusMixture, ToyTarget};
 use mcmc_core::{Chain, Kernel, Mh, NoAdaptation, Proposal, Proposed, Target};
@@ -64,27 +62,8 @@ use pss::{
 use rand::{Rng, RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-/// Counts allocations per thread, to show that raster proposals allocate nothing.
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|a| a.set(a.get() + 1));
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: CountingAllocator = CountingAllocator;
 
 /// Chi-square tests of correct kernels in this file (Sidak correction). Keep in sync.
 const CHI_SQUARE_TESTS: usize = 7;
@@ -696,9 +675,9 @@ fn raster_steps_do_not_allocate() {
         }
     };
     run(10_000, &mut x, &mut y);
-    let before = ALLOCATIONS.with(Cell::get);
+    let before = CountingAllocator::allocations();
     run(1_000, &mut x, &mut y);
-    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    let allocations = CountingAllocator::allocations() - before;
     assert_eq!(
         allocations, 0,
         "{allocations} allocations in 1000 raster/PSSMLT steps"

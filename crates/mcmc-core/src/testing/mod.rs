@@ -53,6 +53,7 @@
 //! report.assert_passes("MH on the uniform mixture", 1);
 //! ```
 
+mod allocations;
 pub mod broken;
 pub mod chi_square;
 mod finite_state;
@@ -64,6 +65,7 @@ mod splat_weights;
 mod stationarity;
 mod two_sample;
 
+pub use allocations::CountingAllocator;
 pub use broken::{
     ForcedAcceptance, MhWithoutHastings, MisWithStaleProbability, MisWithoutLargeStepTerm,
     SplatFinalState, TreatedAsSymmetric, WithoutCurrentSplat,

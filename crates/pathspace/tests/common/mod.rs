@@ -2,7 +2,10 @@
 //! bidirectional mutation.
 #![allow(dead_code)]
 
-use pathspace::{BidirectionalMutation, BidirectionalParams, IndependentSampler, Path, PathScene};
+use pathspace::{
+    BidirectionalMutation, BidirectionalParams, IndependentSampler, Path, PathScene,
+    UnidirectionalParams, UnidirectionalSampler,
+};
 use rand::SeedableRng;
 
 /// A seeded test RNG.
@@ -40,6 +43,37 @@ pub(crate) fn bidirectional<S: PathScene + ?Sized>(
         BidirectionalParams {
             max_segments,
             ..BidirectionalParams::default()
+        },
+    )
+    .unwrap()
+}
+
+/// A chain's start: the first path `sampler` draws with a nonzero luminance on `scene`.
+pub(crate) fn lit_path<S, Smp, R>(scene: &S, sampler: &Smp, rng: &mut R) -> Path
+where
+    S: PathScene + ?Sized,
+    Smp: IndependentSampler,
+    R: rand::Rng,
+{
+    loop {
+        let p = draw(sampler, rng);
+        if p.contribution(scene).luminance() > 0.0 {
+            return p;
+        }
+    }
+}
+
+/// The unidirectional sampler the chain tests start from: at most `max_segments` segments,
+/// light connections with probability 0.5.
+pub(crate) fn unidirectional<S: PathScene + ?Sized>(
+    scene: &S,
+    max_segments: usize,
+) -> UnidirectionalSampler<'_, S> {
+    UnidirectionalSampler::new(
+        scene,
+        UnidirectionalParams {
+            max_segments,
+            connect_probability: 0.5,
         },
     )
     .unwrap()
