@@ -180,6 +180,7 @@ impl<Sc: SharedRegionalScales> PooledRegionalScales<Sc> {
                 None => debug_assert!(false, "visit to region {k} of {}", self.regions.len()),
             }
         }
+        // Keep the buffer's capacity for the next round.
         self.pending = visits;
         self.pending.clear();
     }

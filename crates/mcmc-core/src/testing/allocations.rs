@@ -11,15 +11,21 @@ thread_local! {
 /// The system allocator, counting every allocation of the calling thread. Install it in a test
 /// binary and compare [`CountingAllocator::allocations`] before and after the steps:
 ///
-/// ```ignore
+/// ```
 /// use mcmc_core::testing::CountingAllocator;
 ///
 /// #[global_allocator]
 /// static ALLOCATOR: CountingAllocator = CountingAllocator;
 ///
-/// let before = CountingAllocator::allocations();
-/// // ... steps ...
-/// assert_eq!(CountingAllocator::allocations(), before);
+/// fn main() {
+///     let mut buffer: Vec<f64> = Vec::with_capacity(16);
+///     let before = CountingAllocator::allocations();
+///     buffer.extend([1.0, 2.0]); // within capacity: no allocation
+///     assert_eq!(CountingAllocator::allocations(), before);
+///     let copy = buffer.clone(); // a new vector: one allocation
+///     assert_eq!(CountingAllocator::allocations(), before + 1);
+///     assert_eq!(copy, buffer);
+/// }
 /// ```
 ///
 /// Counts are per thread, so tests running beside each other do not disturb one another.
